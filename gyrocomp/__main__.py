@@ -1,0 +1,3 @@
+from gyrocomp.cli import main
+
+main()

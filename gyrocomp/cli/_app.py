@@ -1,0 +1,146 @@
+"""The Typer application, its global options, and the one place errors become exit codes.
+
+Command modules (``gyrocomp/cli/<command>.py``) decorate functions with
+``@app.command()``; each parses, calls one library function, writes
+atomically and prints. Heavy imports happen inside the command bodies so
+that ``gyrocomp --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import sys
+from pathlib import Path
+from typing import Annotated, Callable, Iterator, Optional
+
+import typer
+from rich.console import Console
+
+from gyrocomp import __version__
+
+app = typer.Typer(
+    name="gyrocomp",
+    help="Temperature-drift compensation and Allan-variance scoring of MEMS gyroscope oven-test logs.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+
+@dataclasses.dataclass
+class State:
+    """Global options, passed to commands through the Typer context."""
+
+    quiet: bool = False
+    debug: bool = False
+
+
+def _version(value: bool) -> None:
+    if value:
+        print(f"gyrocomp {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    ctx: typer.Context,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print no tables or progress.")] = False,
+    debug: Annotated[bool, typer.Option("--debug", help="Show the traceback of an error.")] = False,
+    version: Annotated[
+        Optional[bool],
+        typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit."),
+    ] = None,
+) -> None:
+    ctx.obj = State(quiet=quiet, debug=debug)
+
+
+def state(ctx: typer.Context) -> State:
+    """The global options of this invocation."""
+    return ctx.obj if isinstance(ctx.obj, State) else State()
+
+
+def console_for(ctx: typer.Context, out: Path | str | None = None) -> Console:
+    """Where tables and progress go: stderr when stdout carries data (``--out -``)."""
+    st = state(ctx)
+    to_stderr = str(out) == "-"
+    return Console(stderr=to_stderr, quiet=st.quiet, soft_wrap=False)
+
+
+@contextlib.contextmanager
+def report_errors(ctx: typer.Context) -> Iterator[None]:
+    """Turn a library error into one line on stderr and its exit code.
+
+    Exit codes: 2 bad input or usage, 3 a CI threshold crossed, 1 anything
+    else. With ``--debug`` the exception propagates with its traceback.
+    """
+    from gyrocomp.errors import GyrocompError
+
+    try:
+        yield
+    except typer.Exit:
+        raise
+    except KeyboardInterrupt:
+        print("gyrocomp: interrupted", file=sys.stderr)
+        raise typer.Exit(130)
+    except Exception as err:
+        if state(ctx).debug:
+            raise
+        code = err.exit_code if isinstance(err, GyrocompError) else 1
+        message = str(err).strip().replace("\n", " ") or type(err).__name__
+        if not isinstance(err, GyrocompError):
+            message = f"{type(err).__name__}: {message}"
+        print(f"gyrocomp: {message}", file=sys.stderr)
+        raise typer.Exit(code)
+
+
+@contextlib.contextmanager
+def progress(ctx: typer.Context, description: str, out: Path | str | None = None) -> Iterator[Callable[[int, int], None]]:
+    """A rich progress bar on stderr; yields ``callback(done, total)`` for the library."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    st = state(ctx)
+    bar = Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=Console(stderr=True, quiet=st.quiet),
+        transient=True,
+        disable=st.quiet,
+    )
+    task = bar.add_task(description, total=None)
+
+    def update(done: int, total: int) -> None:
+        bar.update(task, completed=done, total=total)
+
+    with bar:
+        yield update
+
+
+# Options shared by every command that reads a recording.
+TimeCol = Annotated[str, typer.Option("--time-col", help="Name of the time column.")]
+RateCol = Annotated[str, typer.Option("--rate-col", help="Name of the angular-rate column.")]
+TempCol = Annotated[str, typer.Option("--temp-col", help="Name of the temperature column.")]
+TimeUnit = Annotated[str, typer.Option("--time-unit", help="Unit of the time column: s or ms.")]
+RateUnit = Annotated[str, typer.Option("--rate-unit", help="Unit of the rate column: deg/s, deg/h or rad/s.")]
+TempUnit = Annotated[str, typer.Option("--temp-unit", help="Unit of the temperature column: degC or K.")]
+Resample = Annotated[
+    bool,
+    typer.Option("--resample", help="Interpolate a jittered or gapped time axis onto a uniform grid instead of refusing it."),
+]
+
+
+def column_spec(time_col: str, rate_col: str, temp_col: str, time_unit: str, rate_unit: str, temp_unit: str):
+    """Build the :class:`gyrocomp.io.ColumnSpec` of the shared options."""
+    from gyrocomp.io import ColumnSpec
+
+    return ColumnSpec(
+        time=time_col,
+        rate=rate_col,
+        temperature=temp_col,
+        time_unit=time_unit,
+        rate_unit=rate_unit,
+        temperature_unit=temp_unit,
+    )

@@ -1,0 +1,129 @@
+"""Settings from TOML: load, override, and bind to frozen dataclasses.
+
+Every number of a paper lives in ``configs/*.toml`` with its source beside
+it. A stage keeps its settings in a frozen dataclass whose defaults equal
+the shipped TOML (a test checks it); :func:`bind` builds that dataclass from
+a table and refuses unknown keys, naming the file and the key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tomllib
+from pathlib import Path
+from typing import Any, Iterable, TypeVar
+
+from gyrocomp.errors import InputError
+
+__all__ = ["CONFIG_DIR", "load_config", "apply_overrides", "bind", "settings_dict"]
+
+CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
+"""The shipped configs; a bare name such as ``pe-lcd-anfis`` is looked up here."""
+
+T = TypeVar("T")
+
+
+def load_config(path: str | os.PathLike) -> dict:
+    """Read a TOML config by path, or by bare name from :data:`CONFIG_DIR`.
+
+    Raises
+    ------
+    InputError
+        No such file, or invalid TOML (with the line the parser names).
+    """
+    candidate = Path(path)
+    if not candidate.exists() and candidate.suffix == "" and not candidate.parent.name:
+        candidate = CONFIG_DIR / f"{candidate.name}.toml"
+    try:
+        with open(candidate, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such config file") from None
+    except tomllib.TOMLDecodeError as err:
+        raise InputError(f"{path}: invalid TOML ({err})") from None
+
+
+def apply_overrides(config: dict, assignments: Iterable[str]) -> dict:
+    """Return a copy of `config` with ``dotted.key=value`` assignments applied.
+
+    The value is parsed as a TOML value (``1``, ``2.5``, ``true``,
+    ``"text"``, ``[1, 2]``); anything else is taken as a bare string.
+    """
+    result = _deepcopy(config)
+    for assignment in assignments:
+        key, sep, raw = assignment.partition("=")
+        if not sep or not key.strip():
+            raise InputError(f"--set {assignment!r}: expected key=value")
+        try:
+            value = tomllib.loads(f"v = {raw}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = raw
+        node = result
+        parts = key.strip().split(".")
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                raise InputError(f"--set {assignment!r}: {part!r} is not a table")
+        node[parts[-1]] = value
+    return result
+
+
+def bind(cls: type[T], table: dict | None, source: str) -> T:
+    """Build the frozen dataclass `cls` from a config table.
+
+    Missing keys take the dataclass defaults; nested dataclass fields bind
+    recursively; lists become tuples where the field's default is a tuple.
+
+    Raises
+    ------
+    InputError
+        An unknown key (the message lists the known ones) or a value of the
+        wrong type.
+    """
+    table = dict(table or {})
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(table) - set(fields))
+    if unknown:
+        raise InputError(
+            f"{source}: unknown setting {', '.join(unknown)}; known: {', '.join(fields)}"
+        )
+    kwargs: dict[str, Any] = {}
+    for name, value in table.items():
+        f = fields[name]
+        default = _default_of(f)
+        if dataclasses.is_dataclass(default) and isinstance(value, dict):
+            value = bind(type(default), value, f"{source} [{name}]")
+        elif isinstance(default, tuple) and isinstance(value, list):
+            value = tuple(value)
+        elif isinstance(default, float) and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        if default is not None and not dataclasses.is_dataclass(default):
+            if isinstance(default, bool) != isinstance(value, bool) or (
+                isinstance(default, (int, float, str, tuple)) and not isinstance(value, type(default))
+            ):
+                raise InputError(
+                    f"{source}: `{name}` = {value!r} should be of type {type(default).__name__}"
+                )
+        kwargs[name] = value
+    try:
+        return cls(**kwargs)
+    except (TypeError, ValueError) as err:
+        raise InputError(f"{source}: {err}") from None
+
+
+def settings_dict(settings: Any) -> dict:
+    """A dataclass of settings as a plain dict (tuples become lists)."""
+    return dataclasses.asdict(settings)
+
+
+def _default_of(f: dataclasses.Field) -> Any:
+    if f.default is not dataclasses.MISSING:
+        return f.default
+    if f.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
+        return f.default_factory()  # type: ignore[misc]
+    return None
+
+
+def _deepcopy(config: dict) -> dict:
+    return {k: _deepcopy(v) if isinstance(v, dict) else v for k, v in config.items()}

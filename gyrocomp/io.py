@@ -1,0 +1,569 @@
+"""Recordings in, artefacts out.
+
+A *recording* is a table of ``time`` [s], ``rate`` [deg/s] and, where the
+command needs it, ``temperature`` [degC], read from CSV or Parquet (chosen
+by the file's extension; ``-`` reads CSV from standard input). Other column
+names are mapped and other units converted by :class:`ColumnSpec`.
+Everything wrong with a recording raises :class:`~gyrocomp.errors.InputError`
+naming the file, and the line (CSV) or row (Parquet) and column: nothing is
+guessed silently.
+
+Every artefact is written atomically (a temporary file in the target's
+folder, then :func:`os.replace`), and carries a header made by
+:func:`artefact_header`: schema name and version, gyrocomp version, the
+inputs' SHA-256, the settings and the seed, and no wall-clock time, so the
+same inputs and seed give the same bytes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import io as _stdio
+import json
+import math
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+import pandas as pd
+
+from gyrocomp import __version__
+from gyrocomp.errors import InputError, SchemaError
+
+__all__ = [
+    "ColumnSpec",
+    "Recording",
+    "read_recording",
+    "recording_from_frame",
+    "write_table",
+    "read_table",
+    "write_json",
+    "read_json",
+    "atomic_path",
+    "artefact_header",
+    "check_header",
+    "jsonable",
+]
+
+RATE_UNITS = {"deg/s": 1.0, "deg/h": 1.0 / 3600.0, "rad/s": 180.0 / math.pi}
+"""Factors that convert a rate unit to deg/s."""
+
+TIME_UNITS = {"s": 1.0, "ms": 1e-3}
+"""Factors that convert a time unit to seconds."""
+
+TEMPERATURE_UNITS = ("degC", "K")
+
+_PLAUSIBLE_DEGC = (-100.0, 200.0)
+"""Temperatures outside this range are refused as a probable unit mistake."""
+
+_METADATA_KEY = b"gyrocomp"
+
+
+@dataclasses.dataclass(frozen=True)
+class ColumnSpec:
+    """How to find and convert the columns of a recording.
+
+    Parameters
+    ----------
+    time, rate, temperature : str
+        Column names in the file.
+    time_unit : {"s", "ms"}
+        Unit of the time column.
+    rate_unit : {"deg/s", "deg/h", "rad/s"}
+        Unit of the rate column.
+    temperature_unit : {"degC", "K"}
+        Unit of the temperature column.
+    """
+
+    time: str = "time"
+    rate: str = "rate"
+    temperature: str = "temperature"
+    time_unit: str = "s"
+    rate_unit: str = "deg/s"
+    temperature_unit: str = "degC"
+
+    def __post_init__(self):
+        for option, value, choices in (
+            ("time unit", self.time_unit, TIME_UNITS),
+            ("rate unit", self.rate_unit, RATE_UNITS),
+            ("temperature unit", self.temperature_unit, TEMPERATURE_UNITS),
+        ):
+            if value not in choices:
+                raise InputError(
+                    f"unknown {option} {value!r}; choose one of {', '.join(choices)}"
+                )
+
+
+@dataclasses.dataclass
+class Recording:
+    """A validated recording.
+
+    Attributes
+    ----------
+    data : pandas.DataFrame
+        ``time`` [s] (strictly increasing, uniform within the tolerance),
+        ``rate`` [deg/s], ``temperature`` [degC] when present, and any
+        further numeric columns of the file unchanged.
+    name : str
+        The file's name (``"-"`` for standard input), used in messages.
+    sha256 : str
+        SHA-256 of the file's bytes.
+    fs_hz : float
+        Sample rate, from the median sampling interval.
+    metadata : dict
+        The ``gyrocomp`` metadata of a Parquet file written by this tool
+        (the simulator stores its truth there), else empty.
+    """
+
+    data: pd.DataFrame
+    name: str
+    sha256: str
+    fs_hz: float
+    metadata: dict = dataclasses.field(default_factory=dict)
+
+    @property
+    def time_s(self) -> np.ndarray:
+        return self.data["time"].to_numpy()
+
+    @property
+    def rate_dps(self) -> np.ndarray:
+        return self.data["rate"].to_numpy()
+
+    @property
+    def temperature_c(self) -> np.ndarray | None:
+        if "temperature" not in self.data:
+            return None
+        return self.data["temperature"].to_numpy()
+
+    def input_record(self) -> dict:
+        """The ``inputs`` entry of an artefact header for this recording."""
+        return {"name": Path(self.name).name, "sha256": self.sha256}
+
+
+def read_recording(
+    path: str | os.PathLike,
+    columns: ColumnSpec = ColumnSpec(),
+    *,
+    require_temperature: bool = False,
+    min_samples: int = 2,
+    jitter_tolerance: float = 0.5,
+    resample: bool = False,
+) -> Recording:
+    """Read and validate a recording from CSV or Parquet.
+
+    Parameters
+    ----------
+    path : path-like or "-"
+        ``.csv`` or ``.parquet`` (also ``.pq``); ``"-"`` reads CSV from stdin.
+    columns : ColumnSpec
+        Column names and units in the file.
+    require_temperature : bool
+        Refuse a recording without the temperature column.
+    min_samples : int
+        Fewest samples the calling command can work with.
+    jitter_tolerance : float
+        Largest allowed deviation of a sampling interval from the median
+        interval, as a fraction of the median.
+    resample : bool
+        Instead of refusing a jittered or gapped time axis, interpolate every
+        column linearly onto a uniform grid at the median interval.
+
+    Returns
+    -------
+    Recording
+
+    Raises
+    ------
+    InputError
+        Missing, empty or header-only file; missing column; non-numeric,
+        NaN or infinite cell; time not strictly increasing or duplicated;
+        jitter beyond the tolerance; fewer than `min_samples` samples;
+        temperature outside a plausible range for the declared unit.
+    """
+    name, raw = _read_bytes(path)
+    sha = hashlib.sha256(raw).hexdigest()
+    kind = _kind(name)
+    metadata = {}
+    if kind == "parquet":
+        frame, metadata = _parse_parquet(name, raw)
+        where = "row"
+        first = 1
+    else:
+        frame = _parse_csv(name, raw)
+        where = "line"
+        first = 2  # line 1 is the header
+    del raw
+    return recording_from_frame(
+        frame,
+        name=name,
+        sha256=sha,
+        columns=columns,
+        require_temperature=require_temperature,
+        min_samples=min_samples,
+        jitter_tolerance=jitter_tolerance,
+        resample=resample,
+        metadata=metadata,
+        _where=(where, first),
+    )
+
+
+def recording_from_frame(
+    frame: pd.DataFrame,
+    *,
+    name: str = "<table>",
+    sha256: str | None = None,
+    columns: ColumnSpec = ColumnSpec(),
+    require_temperature: bool = False,
+    min_samples: int = 2,
+    jitter_tolerance: float = 0.5,
+    resample: bool = False,
+    metadata: dict | None = None,
+    _where: tuple[str, int] = ("row", 1),
+) -> Recording:
+    """Validate an in-memory table as a recording (see :func:`read_recording`).
+
+    `sha256` defaults to the hash of the table's CSV form.
+    """
+    where, first = _where
+
+    def locate(i: int) -> str:
+        return f"{name} {where} {int(i) + first}"
+
+    if len(frame) == 0:
+        raise InputError(f"{name}: has a header but no data rows")
+    wanted = {"time": columns.time, "rate": columns.rate}
+    if require_temperature or columns.temperature in frame.columns:
+        wanted["temperature"] = columns.temperature
+    missing = [src for src in wanted.values() if src not in frame.columns]
+    if missing:
+        hint = ""
+        if "temperature" in wanted and wanted["temperature"] in missing:
+            hint = " (map it with --temp-col)"
+        raise InputError(
+            f"{name}: missing column {', '.join(repr(m) for m in missing)}{hint}; "
+            f"the file has {', '.join(repr(str(c)) for c in frame.columns)}"
+        )
+    out = {}
+    for key, src in wanted.items():
+        out[key] = _numeric_column(frame[src], src, locate)
+    for extra in frame.columns:
+        if extra not in wanted.values() and extra not in out:
+            col = pd.to_numeric(frame[extra], errors="coerce")
+            if col.notna().all():
+                out[str(extra)] = col.to_numpy(dtype=float)
+    out["time"] = out["time"] * TIME_UNITS[columns.time_unit]
+    out["rate"] = out["rate"] * RATE_UNITS[columns.rate_unit]
+    if "temperature" in out:
+        if columns.temperature_unit == "K":
+            out["temperature"] = out["temperature"] - 273.15
+        _check_temperature(out["temperature"], columns.temperature, locate)
+    n = len(out["time"])
+    if n < min_samples:
+        raise InputError(f"{name}: {n} samples, this command needs at least {min_samples}")
+    time = out["time"]
+    dt = np.diff(time)
+    bad = np.flatnonzero(dt <= 0)
+    if bad.size:
+        i = bad[0] + 1
+        what = "duplicates" if dt[bad[0]] == 0 else "goes back from"
+        raise InputError(
+            f"{locate(i)}: `{columns.time}` = {time[i]!r} {what} the previous "
+            f"time {time[i - 1]!r}; time must be strictly increasing"
+        )
+    nominal = float(np.median(dt)) if dt.size else 1.0
+    if dt.size:
+        deviation = np.abs(dt - nominal)
+        worst = int(np.argmax(deviation))
+        if deviation[worst] > jitter_tolerance * nominal:
+            if not resample:
+                raise InputError(
+                    f"{locate(worst + 1)}: sampling interval {dt[worst]:.6g} s in "
+                    f"`{columns.time}`, the median is {nominal:.6g} s (tolerance "
+                    f"{jitter_tolerance:.0%}); pass --resample to interpolate onto "
+                    f"a uniform grid"
+                )
+            out = _resample(out, nominal)
+    data = pd.DataFrame(out)
+    if sha256 is None:
+        sha256 = hashlib.sha256(frame.to_csv(index=False).encode()).hexdigest()
+    return Recording(
+        data=data,
+        name=name,
+        sha256=sha256,
+        fs_hz=1.0 / nominal,
+        metadata=metadata or {},
+    )
+
+
+def write_table(path: str | os.PathLike, frame: pd.DataFrame, header: dict) -> None:
+    """Write a table atomically: Parquet or CSV by extension, ``-`` is CSV on stdout.
+
+    The header (see :func:`artefact_header`) goes into the Parquet file's
+    key-value metadata under ``gyrocomp``; a CSV table carries no header, so
+    write Parquet wherever traceability matters.
+    """
+    if str(path) == "-":
+        frame.to_csv(sys.stdout, index=False, float_format=None)
+        sys.stdout.flush()
+        return
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    kind = _kind(str(path))
+    with atomic_path(path) as tmp:
+        if kind == "csv":
+            frame.to_csv(tmp, index=False)
+        else:
+            table = pa.Table.from_pandas(frame, preserve_index=False)
+            meta = {_METADATA_KEY: json.dumps(jsonable(header), sort_keys=True).encode()}
+            table = table.replace_schema_metadata(meta)
+            pq.write_table(table, tmp)
+
+
+def read_table(path: str | os.PathLike, schema: str) -> tuple[pd.DataFrame, dict]:
+    """Read a Parquet artefact written by :func:`write_table` and check its schema.
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+    header : dict
+        The artefact header; :func:`check_header` has accepted it.
+    """
+    name, raw = _read_bytes(path)
+    if _kind(name) != "parquet":
+        raise InputError(f"{name}: expected a .parquet artefact")
+    frame, header = _parse_parquet(name, raw)
+    check_header(header, schema, name)
+    return frame, header
+
+
+def write_json(path: str | os.PathLike, obj: Any) -> None:
+    """Write JSON atomically (``-`` writes to stdout); NaN becomes ``null``."""
+    text = json.dumps(jsonable(obj), indent=2, allow_nan=False) + "\n"
+    if str(path) == "-":
+        sys.stdout.write(text)
+        sys.stdout.flush()
+        return
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(text, encoding="utf-8")
+
+
+def read_json(path: str | os.PathLike, schema: str | None = None) -> dict:
+    """Read a JSON artefact; with `schema`, check its header (:func:`check_header`)."""
+    name, raw = _read_bytes(path)
+    try:
+        obj = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        line = getattr(err, "lineno", None)
+        at = f" line {line}" if line else ""
+        raise InputError(f"{name}{at}: not valid JSON ({err.args[0] if err.args else err})") from None
+    if not isinstance(obj, dict):
+        raise InputError(f"{name}: expected a JSON object at the top level")
+    if schema is not None:
+        check_header(obj, schema, name)
+    return obj
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[str]:
+    """Yield a temporary path beside `path`; on success rename it onto `path`.
+
+    The parent folder is created. If the body raises, the temporary file is
+    removed and `path` is left as it was.
+    """
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    os.close(fd)
+    try:
+        yield tmp
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+SCHEMA_VERSION = "1.0"
+
+
+def artefact_header(
+    schema: str,
+    *,
+    inputs: list[dict] | None = None,
+    settings: dict | None = None,
+    seed: int | None = None,
+    version: str = SCHEMA_VERSION,
+) -> dict:
+    """The traceability header every artefact starts with.
+
+    Parameters
+    ----------
+    schema : str
+        Artefact kind, e.g. ``"gyrocomp.allan"``.
+    inputs : list of dict
+        ``{"name", "sha256"}`` per input (:meth:`Recording.input_record`).
+    settings : dict
+        The fully resolved settings.
+    seed : int or None
+        The seed of every random step.
+    version : str
+        ``"major.minor"``; readers refuse a newer major.
+    """
+    return {
+        "schema": {"name": schema, "version": version},
+        "gyrocomp_version": __version__,
+        "inputs": list(inputs or []),
+        "settings": settings or {},
+        "seed": seed,
+    }
+
+
+def check_header(obj: dict, schema: str, name: str, supported_major: int | None = None) -> None:
+    """Refuse an artefact of a foreign schema or of a newer major version.
+
+    Raises
+    ------
+    SchemaError
+    """
+    major_supported = supported_major or int(SCHEMA_VERSION.split(".")[0])
+    info = obj.get("schema") if isinstance(obj, dict) else None
+    if not isinstance(info, dict) or "name" not in info or "version" not in info:
+        raise SchemaError(f"{name}: not a gyrocomp artefact (no `schema` name and version)")
+    if info["name"] != schema:
+        raise SchemaError(f"{name}: is a {info['name']!r} artefact, expected {schema!r}")
+    try:
+        major = int(str(info["version"]).split(".")[0])
+    except ValueError:
+        raise SchemaError(f"{name}: unreadable schema version {info['version']!r}") from None
+    if major > major_supported:
+        raise SchemaError(
+            f"{name}: schema {schema} version {info['version']} is newer than this "
+            f"gyrocomp ({__version__}) reads (major {major_supported}); upgrade gyrocomp"
+        )
+
+
+def jsonable(obj: Any) -> Any:
+    """Convert numpy scalars and arrays, paths and tuples to plain JSON values.
+
+    Non-finite floats become ``None`` (JSON has no NaN).
+    """
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, (np.bool_, bool)):
+        return bool(obj)
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        value = float(obj)
+        return value if math.isfinite(value) else None
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    return obj
+
+
+def _read_bytes(path: str | os.PathLike) -> tuple[str, bytes]:
+    if str(path) == "-":
+        return "-", sys.stdin.buffer.read()
+    name = os.fspath(path)
+    try:
+        with open(name, "rb") as fh:
+            return name, fh.read()
+    except FileNotFoundError:
+        raise InputError(f"{name}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{name}: is a directory, expected a file") from None
+    except PermissionError:
+        raise InputError(f"{name}: permission denied") from None
+
+
+def _kind(name: str) -> str:
+    if name == "-":
+        return "csv"
+    suffix = Path(name).suffix.lower()
+    if suffix in (".parquet", ".pq"):
+        return "parquet"
+    if suffix in (".csv", ".txt"):
+        return "csv"
+    raise InputError(f"{name}: unknown extension {suffix!r}; use .csv or .parquet")
+
+
+def _parse_csv(name: str, raw: bytes) -> pd.DataFrame:
+    if not raw.strip():
+        raise InputError(f"{name}: file is empty")
+    try:
+        return pd.read_csv(_stdio.BytesIO(raw), comment="#", skipinitialspace=True)
+    except pd.errors.EmptyDataError:
+        raise InputError(f"{name}: file is empty") from None
+    except pd.errors.ParserError as err:
+        raise InputError(f"{name}: unreadable CSV ({str(err).strip().splitlines()[-1]})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{name}: not a text CSV file") from None
+
+
+def _parse_parquet(name: str, raw: bytes) -> tuple[pd.DataFrame, dict]:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if not raw:
+        raise InputError(f"{name}: file is empty")
+    try:
+        table = pq.read_table(pa.BufferReader(raw))
+    except (pa.ArrowInvalid, OSError) as err:
+        raise InputError(f"{name}: not a readable Parquet file ({err})") from None
+    meta = table.schema.metadata or {}
+    header = {}
+    if _METADATA_KEY in meta:
+        try:
+            header = json.loads(meta[_METADATA_KEY])
+        except json.JSONDecodeError:
+            raise InputError(f"{name}: corrupted gyrocomp metadata") from None
+    return table.to_pandas(), header
+
+
+def _numeric_column(series: pd.Series, src: str, locate) -> np.ndarray:
+    if series.dtype == object or pd.api.types.is_string_dtype(series.dtype):
+        values = pd.to_numeric(series, errors="coerce")
+        bad = values.isna() & series.notna()
+        if bad.any():
+            i = int(np.flatnonzero(bad.to_numpy())[0])
+            raise InputError(f"{locate(i)}: `{src}` = {series.iloc[i]!r} is not a number")
+        series = values
+    if not pd.api.types.is_numeric_dtype(series.dtype) or pd.api.types.is_bool_dtype(series.dtype):
+        raise InputError(f"{locate(0)}: `{src}` is not numeric (type {series.dtype})")
+    values = series.to_numpy(dtype=float)
+    finite = np.isfinite(values)
+    if not finite.all():
+        i = int(np.flatnonzero(~finite)[0])
+        what = "missing or NaN" if np.isnan(values[i]) else f"{values[i]!r}"
+        raise InputError(f"{locate(i)}: `{src}` is {what}")
+    return values
+
+
+def _check_temperature(temperature: np.ndarray, src: str, locate) -> None:
+    lo, hi = _PLAUSIBLE_DEGC
+    outside = (temperature < lo) | (temperature > hi)
+    if outside.any():
+        i = int(np.flatnonzero(outside)[0])
+        raise InputError(
+            f"{locate(i)}: `{src}` = {temperature[i]:g} degC is outside "
+            f"[{lo:g}, {hi:g}] degC; wrong unit? (pass --temp-unit K for kelvin)"
+        )
+
+
+def _resample(columns: dict[str, np.ndarray], interval: float) -> dict[str, np.ndarray]:
+    time = columns["time"]
+    n = int(math.floor((time[-1] - time[0]) / interval + 1e-9)) + 1
+    grid = time[0] + interval * np.arange(n)
+    return {key: (grid if key == "time" else np.interp(grid, time, values)) for key, values in columns.items()}
