@@ -272,8 +272,8 @@ def recording_from_frame(
         i = bad[0] + 1
         what = "duplicates" if dt[bad[0]] == 0 else "goes back from"
         raise InputError(
-            f"{locate(i)}: `{columns.time}` = {time[i]!r} {what} the previous "
-            f"time {time[i - 1]!r}; time must be strictly increasing"
+            f"{locate(i)}: `{columns.time}` = {float(time[i])!r} {what} the previous "
+            f"time {float(time[i - 1])!r}; time must be strictly increasing"
         )
     nominal = float(np.median(dt)) if dt.size else 1.0
     if dt.size:
@@ -546,7 +546,7 @@ def _numeric_column(series: pd.Series, src: str, locate) -> np.ndarray:
     finite = np.isfinite(values)
     if not finite.all():
         i = int(np.flatnonzero(~finite)[0])
-        what = "missing or NaN" if np.isnan(values[i]) else f"{values[i]!r}"
+        what = "missing or NaN" if np.isnan(values[i]) else f"{float(values[i])!r}"
         raise InputError(f"{locate(i)}: `{src}` is {what}")
     return values
 

@@ -1,0 +1,58 @@
+"""The command line as a whole: help on every command, version, start-up cost."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+from typer.testing import CliRunner
+
+from gyrocomp import __version__
+from gyrocomp.cli import app
+
+runner = CliRunner()
+
+
+def _commands():
+    import typer.main
+
+    group = typer.main.get_command(app)
+    return sorted(group.commands)
+
+
+def test_version():
+    result = runner.invoke(app, ["--version"])
+    assert result.exit_code == 0
+    assert result.stdout.strip() == f"gyrocomp {__version__}"
+
+
+def test_version_matches_the_package_metadata():
+    from importlib.metadata import version
+
+    assert version("gyrocomp") == __version__
+
+
+@pytest.mark.parametrize("command", _commands())
+def test_every_command_has_help(command):
+    result = runner.invoke(app, [command, "--help"])
+    assert result.exit_code == 0
+    group_help = runner.invoke(app, ["--help"]).stdout
+    assert command in group_help
+    assert len(result.stdout.strip().splitlines()) > 3
+
+
+def test_start_up_imports_no_heavy_module():
+    """`gyrocomp --help` must stay fast: no numeric stack at import time."""
+    code = (
+        "import sys, gyrocomp.cli\n"
+        "heavy = [m for m in ('numpy', 'pandas', 'scipy', 'matplotlib', 'sklearn', 'pyarrow') if m in sys.modules]\n"
+        "print(','.join(heavy))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""
+
+
+def test_unknown_command_is_a_usage_error():
+    result = runner.invoke(app, ["frobnicate"])
+    assert result.exit_code == 2
