@@ -24,5 +24,9 @@ test-slow: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 
+sample-data: $(STAMP)
+	$(BIN)/gyrocomp simulate configs/sample/oven_train.toml --out sample_data/oven_train.parquet
+	$(BIN)/gyrocomp simulate configs/sample/oven_test.toml --out sample_data/oven_test.parquet
+
 clean:
 	rm -rf out .pytest_cache

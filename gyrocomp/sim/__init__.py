@@ -1,0 +1,47 @@
+"""Gyro simulator: oven temperature profiles, the baseline error model and every effect.
+
+Public API
+----------
+:func:`simulate`
+    ``simulate(gyro, profile, *, fs_hz, seed, truth_columns=False, reference=None)``
+    -> ``(frame, truth)``.
+:func:`profile_from_recording`
+    Drive the simulator by a recording's measured temperature.
+:mod:`gyrocomp.sim.effects`
+    The deterministic bias shapes (``thermal_lag``, ``temp_rate``,
+    ``hysteresis``, ``warmup``, ``rate_ramp``, ``periodic``).
+:mod:`gyrocomp.sim.noise`
+    White, flicker and random-walk rate noise from IEEE 952 ``N``, ``B``, ``K``.
+:mod:`gyrocomp.sim.model`
+    Settings dataclasses and :func:`load_sim_config`.
+"""
+
+from gyrocomp.sim import effects, noise
+from gyrocomp.sim.model import (
+    EFFECTS,
+    GyroSettings,
+    ReferenceSettings,
+    RunSettings,
+    SimConfig,
+    load_sim_config,
+)
+from gyrocomp.sim.profile import Profile, ProfileSettings, profile_from_recording, temperature_profile
+from gyrocomp.sim.simulate import RECORDING_SCHEMA, run, simulate
+
+__all__ = [
+    "EFFECTS",
+    "GyroSettings",
+    "Profile",
+    "ProfileSettings",
+    "RECORDING_SCHEMA",
+    "ReferenceSettings",
+    "RunSettings",
+    "SimConfig",
+    "effects",
+    "load_sim_config",
+    "noise",
+    "profile_from_recording",
+    "run",
+    "simulate",
+    "temperature_profile",
+]

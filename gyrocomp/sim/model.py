@@ -1,0 +1,323 @@
+"""Settings of the simulator, bound from TOML into frozen dataclasses.
+
+A simulation config has up to four tables: ``[run]`` (:class:`RunSettings`),
+``[gyro]`` (:class:`GyroSettings`, one sub-table per effect of the
+vocabulary), ``[profile]`` (:class:`~gyrocomp.sim.profile.ProfileSettings`)
+and ``[reference]`` (:class:`ReferenceSettings`). ``run.gyro`` and
+``run.profile`` name a base file in ``configs/gyro/`` and
+``configs/profiles/`` whose table the config's own table updates key by
+key. The defaults below equal ``configs/gyro/default.toml`` and
+``configs/profiles/oven-paper.toml`` (a test checks it).
+
+Every numeric field carries its unit in ``dataclasses.field(metadata=...)``;
+:func:`units_of` reads them for the truth record.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from gyrocomp.config import CONFIG_DIR, apply_overrides, bind, load_config
+from gyrocomp.errors import InputError
+from gyrocomp.sim.profile import ProfileSettings, unit_field
+
+__all__ = [
+    "EFFECTS",
+    "ThermalLag",
+    "TempRate",
+    "Hysteresis",
+    "Warmup",
+    "RateRamp",
+    "Periodic",
+    "BiasInstability",
+    "RateRandomWalk",
+    "GyroSettings",
+    "ReferenceSettings",
+    "RunSettings",
+    "SimConfig",
+    "load_sim_config",
+    "resolve_config_path",
+    "units_of",
+]
+
+EFFECTS = (
+    "thermal_lag",
+    "temp_rate",
+    "hysteresis",
+    "warmup",
+    "rate_ramp",
+    "periodic",
+    "bias_instability",
+    "rate_random_walk",
+)
+"""The effect vocabulary of DESIGN.md, in the order reports list them."""
+
+
+@dataclasses.dataclass(frozen=True)
+class ThermalLag:
+    """``thermal_lag``: the bias polynomial is evaluated at the element temperature,
+    a first-order lag of the housing temperature (:func:`~gyrocomp.sim.effects.element_temperature`)."""
+
+    enabled: bool = True
+    tau_s: float = unit_field(400.0, "s")
+
+
+@dataclasses.dataclass(frozen=True)
+class TempRate:
+    """``temp_rate``: bias ``g dT/dt`` from thermal gradients (IEEE Std 1431)."""
+
+    enabled: bool = True
+    coefficient_dps_per_c_per_s: float = unit_field(1.5, "deg/s per degC/s")
+
+
+@dataclasses.dataclass(frozen=True)
+class Hysteresis:
+    """``hysteresis``: bias ``+A`` on the heating branch and ``-A`` on the cooling branch
+    (:func:`~gyrocomp.sim.effects.hysteresis_branch`)."""
+
+    enabled: bool = False
+    amplitude_dps: float = unit_field(0.01, "deg/s")
+    deadband_c: float = unit_field(0.5, "degC")
+
+
+@dataclasses.dataclass(frozen=True)
+class Warmup:
+    """``warmup``: exponential power-on transient."""
+
+    enabled: bool = True
+    amplitude_dps: float = unit_field(0.03, "deg/s")
+    tau_s: float = unit_field(900.0, "s")
+
+
+@dataclasses.dataclass(frozen=True)
+class RateRamp:
+    """``rate_ramp``: bias linear in time since power-on."""
+
+    enabled: bool = False
+    slope_dps_per_s: float = unit_field(2e-7, "deg/s/s")
+
+
+@dataclasses.dataclass(frozen=True)
+class Periodic:
+    """``periodic``: sinusoidal interference of fixed period."""
+
+    enabled: bool = False
+    amplitude_dps: float = unit_field(0.005, "deg/s")
+    period_s: float = unit_field(1800.0, "s")
+    phase_rad: float = unit_field(0.0, "rad")
+
+
+@dataclasses.dataclass(frozen=True)
+class BiasInstability:
+    """``bias_instability``: flicker bias noise of IEEE bias instability ``B``."""
+
+    enabled: bool = True
+    b_deg_per_h: float = unit_field(10.0, "deg/h")
+
+
+@dataclasses.dataclass(frozen=True)
+class RateRandomWalk:
+    """``rate_random_walk``: random walk of the bias with IEEE coefficient ``K``."""
+
+    enabled: bool = True
+    k_deg_per_h_per_sqrt_h: float = unit_field(5.0, "deg/h/sqrt(h)")
+
+
+@dataclasses.dataclass(frozen=True)
+class GyroSettings:
+    """One gyro: the baseline error model and the effects beyond it.
+
+    The baseline (both papers' model) is
+    ``rate = offset + sum_k c_k (T - T_ref)^k + white noise(ARW)``;
+    each effect table adds one term of the vocabulary. Scale factor
+    ``(1 + s_0 + s_1 (T - T_ref))`` multiplies an optional reference rate,
+    and the output is quantised to `resolution_dps`.
+    """
+
+    name: str = "dual-mass-default"
+    offset_dps: float = unit_field(0.12, "deg/s")
+    reference_c: float = unit_field(25.0, "degC")
+    temperature_coefficients: tuple = unit_field((1.5e-3, 2.0e-5, 8.0e-7), "deg/s/degC^k, k = 1, 2, 3")
+    arw: float = unit_field(1.0, "deg/sqrt(h)")
+    resolution_dps: float = unit_field(1e-4, "deg/s")
+    scale_factor_ppm: float = unit_field(0.0, "ppm")
+    scale_factor_ppm_per_c: float = unit_field(100.0, "ppm/degC")
+    thermal_lag: ThermalLag = ThermalLag()
+    temp_rate: TempRate = TempRate()
+    hysteresis: Hysteresis = Hysteresis()
+    warmup: Warmup = Warmup()
+    rate_ramp: RateRamp = RateRamp()
+    periodic: Periodic = Periodic()
+    bias_instability: BiasInstability = BiasInstability()
+    rate_random_walk: RateRandomWalk = RateRandomWalk()
+
+    def __post_init__(self):
+        if len(self.temperature_coefficients) > 3:
+            raise InputError(
+                f"gyro.temperature_coefficients: {len(self.temperature_coefficients)} given, at most 3 (cubic)"
+            )
+        for name, value in (("arw", self.arw), ("resolution_dps", self.resolution_dps)):
+            if not value >= 0:
+                raise InputError(f"gyro.{name} = {value!r} must be >= 0")
+
+    def active_effects(self) -> list[str]:
+        """Names of the enabled effects, in vocabulary order."""
+        return [name for name in EFFECTS if getattr(self, name).enabled]
+
+
+@dataclasses.dataclass(frozen=True)
+class ReferenceSettings:
+    """A reference angular rate (turntable) the gyro measures, written as ``reference_rate``.
+
+    ``kind = "none"`` (static), ``"steps"`` (the `levels_dps` in turn, each
+    for `step_s`, cycling) or ``"sine"`` (`amplitude_dps` at `period_s`).
+    """
+
+    kind: str = "none"
+    levels_dps: tuple = unit_field((0.0, 10.0, 0.0, -10.0), "deg/s")
+    step_s: float = unit_field(600.0, "s")
+    amplitude_dps: float = unit_field(10.0, "deg/s")
+    period_s: float = unit_field(60.0, "s")
+
+    def __post_init__(self):
+        if self.kind not in ("none", "steps", "sine"):
+            raise InputError(f"reference.kind = {self.kind!r}; choose none, steps or sine")
+        if self.kind == "steps" and (not self.levels_dps or not self.step_s > 0):
+            raise InputError("reference: steps need levels_dps and step_s > 0")
+        if self.kind == "sine" and not self.period_s > 0:
+            raise InputError(f"reference.period_s = {self.period_s!r} must be > 0")
+
+
+@dataclasses.dataclass(frozen=True)
+class RunSettings:
+    """How to run: sample rate, length, seed and the base gyro and profile files."""
+
+    fs_hz: float = unit_field(1.0, "Hz")
+    duration_s: float = unit_field(0.0, "s")
+    seed: int = 0
+    gyro: str = "default"
+    profile: str = "oven-paper"
+    truth_columns: bool = False
+
+    def __post_init__(self):
+        if not self.fs_hz > 0:
+            raise InputError(f"run.fs_hz = {self.fs_hz!r} must be > 0")
+        if not self.duration_s >= 0:
+            raise InputError(f"run.duration_s = {self.duration_s!r} must be >= 0 (0: the profile's length)")
+
+
+@dataclasses.dataclass(frozen=True)
+class SimConfig:
+    """A resolved simulation config (what ``gyrocomp simulate`` runs)."""
+
+    run: RunSettings
+    gyro: GyroSettings
+    profile: ProfileSettings
+    reference: ReferenceSettings
+
+
+def resolve_config_path(name: str | Path, kind: str) -> Path:
+    """A config path as given, else ``configs/<kind>/<name>.toml``, else ``configs/<name>.toml``."""
+    path = Path(name)
+    if path.exists():
+        return path
+    for candidate in (CONFIG_DIR / kind / f"{path.name}.toml", CONFIG_DIR / f"{name}.toml", CONFIG_DIR / kind / path.name):
+        if candidate.exists():
+            return candidate
+    raise InputError(f"{name}: no such {kind} config (looked in the working folder and {CONFIG_DIR / kind})")
+
+
+def load_sim_config(config=None, *, profile=None, overrides=(), seed=None, fs_hz=None, truth_columns=None) -> SimConfig:
+    """Read, merge, override and bind a simulation config.
+
+    Parameters
+    ----------
+    config : path-like or None
+        A TOML with ``[run]``, ``[gyro]``, ``[profile]``, ``[reference]``;
+        ``None`` runs the defaults (the papers' oven test on the default gyro).
+    profile : path-like or None
+        A profile TOML (path or name in ``configs/profiles/``) whose
+        ``[profile]`` table replaces the config's.
+    overrides : sequence of str
+        ``table.key=value`` assignments applied last (``--set``).
+    seed, fs_hz, truth_columns : optional
+        Explicit options; they beat the config.
+
+    Raises
+    ------
+    InputError
+        Unknown table or key (named with its file), a bad value, a missing file.
+    """
+    source = str(config) if config is not None else "defaults"
+    table = load_config(resolve_config_path(config, "sample")) if config is not None else {}
+    table = apply_overrides(table, overrides)
+    _check_tables(table, source)
+    run_table = dict(table.get("run", {}))
+    for key, value in (("seed", seed), ("fs_hz", fs_hz), ("truth_columns", truth_columns)):
+        if value is not None:
+            run_table[key] = value
+    run = bind(RunSettings, run_table, f"{source} [run]")
+    gyro_base_path = resolve_config_path(run.gyro, "gyro")
+    gyro_table = _merge(_table_of(gyro_base_path, "gyro"), table.get("gyro", {}))
+    if profile is not None:
+        profile_path = resolve_config_path(profile, "profiles")
+        profile_table = _table_of(profile_path, "profile")
+        profile_table = _merge(profile_table, _overrides_of(overrides, "profile"))
+        profile_source = str(profile_path)
+    else:
+        profile_path = resolve_config_path(run.profile, "profiles")
+        profile_table = _merge(_table_of(profile_path, "profile"), table.get("profile", {}))
+        profile_source = f"{source} (base {profile_path.name})"
+    return SimConfig(
+        run=run,
+        gyro=bind(GyroSettings, gyro_table, f"{source} (base {gyro_base_path.name}) [gyro]"),
+        profile=bind(ProfileSettings, profile_table, f"{profile_source} [profile]"),
+        reference=bind(ReferenceSettings, table.get("reference", {}), f"{source} [reference]"),
+    )
+
+
+def units_of(settings) -> dict:
+    """The unit of every numeric field of a settings dataclass, nested tables included."""
+    out = {}
+    for f in dataclasses.fields(settings):
+        value = getattr(settings, f.name)
+        if dataclasses.is_dataclass(value):
+            out[f.name] = units_of(value)
+        elif "unit" in f.metadata:
+            out[f.name] = f.metadata["unit"]
+    return out
+
+
+_TABLES = ("run", "gyro", "profile", "reference")
+
+
+def _check_tables(table, source):
+    unknown = sorted(set(table) - set(_TABLES))
+    if unknown:
+        raise InputError(f"{source}: unknown table or key {', '.join(unknown)}; known: {', '.join(_TABLES)}")
+    for name in _TABLES:
+        if name in table and not isinstance(table[name], dict):
+            raise InputError(f"{source}: `{name}` should be a table")
+
+
+def _table_of(path, name):
+    table = load_config(path)
+    unknown = sorted(set(table) - {name})
+    if unknown:
+        raise InputError(f"{path}: unknown table or key {', '.join(unknown)}; a {name} file holds only [{name}]")
+    return table.get(name, {})
+
+
+def _overrides_of(overrides, name):
+    return apply_overrides({}, overrides).get(name, {})
+
+
+def _merge(base, update):
+    out = dict(base)
+    for key, value in update.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
