@@ -1,0 +1,282 @@
+"""Shared machinery of the learners: the estimator contract and JSON round trip.
+
+Every learner of :mod:`gyrocomp.models` follows scikit-learn's contract
+(``__init__`` stores its arguments unchanged; ``fit`` validates them, draws
+its generator from ``seed``, sets the ``attrs_`` and returns ``self``) and
+serialises to a plain-JSON dict::
+
+    {"kind": "elm", "version": 1, "params": {...}, "fitted": {...} | null}
+
+Arrays are nested lists of JSON numbers. Python writes a float with the
+shortest text that reads back to the same double, so ``json.dumps`` then
+``json.loads`` restores every learned number bit for bit and predictions
+after a round trip are identical.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from typing import Any
+
+import numpy as np
+
+from gyrocomp.errors import GyrocompError, InputError
+
+FORMAT_VERSION = 1
+"""Version of the ``to_dict`` layout; :meth:`Learner.from_dict` refuses newer ones."""
+
+
+class NotFittedError(GyrocompError, ValueError, AttributeError):
+    """``predict`` (or ``to_dict`` of a fitted attribute) on a model that was never fitted.
+
+    Subclasses ``ValueError`` and ``AttributeError`` as scikit-learn's
+    ``NotFittedError`` does.
+    """
+
+
+class Learner:
+    """Base of the learners: parameters, fitted state and the JSON round trip.
+
+    Subclasses set ``kind`` (the ``"kind"`` key of :meth:`to_dict`),
+    ``_fitted`` (names of the learned attributes, all ending in ``_``) and
+    ``_arrays`` (those of them that are float arrays).
+    """
+
+    kind: str = ""
+    _fitted: tuple[str, ...] = ()
+    _arrays: frozenset[str] = frozenset()
+
+    # --- parameters -------------------------------------------------------
+    @classmethod
+    def _param_names(cls) -> list[str]:
+        signature = inspect.signature(cls.__init__)
+        return [name for name in signature.parameters if name != "self"]
+
+    def get_params(self, deep: bool = True) -> dict[str, Any]:
+        """The ``__init__`` arguments as stored (``deep`` is accepted for scikit-learn)."""
+        return {name: getattr(self, name) for name in self._param_names()}
+
+    def set_params(self, **params: Any) -> "Learner":
+        """Set ``__init__`` arguments; an unknown name raises ``ValueError``."""
+        names = self._param_names()
+        for name, value in params.items():
+            if name not in names:
+                raise InputError(
+                    f"{type(self).__name__}: unknown parameter {name!r}; known: {', '.join(names)}"
+                )
+            setattr(self, name, value)
+        return self
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self.get_params().items())
+        return f"{type(self).__name__}({args})"
+
+    # --- fitted state -----------------------------------------------------
+    def _is_fitted(self) -> bool:
+        return all(hasattr(self, name) for name in self._fitted)
+
+    def _check_fitted(self) -> None:
+        if not self._is_fitted():
+            raise NotFittedError(
+                f"this {type(self).__name__} is not fitted yet; call fit(X, y) first"
+            )
+
+    def _encode_fitted(self) -> dict[str, Any]:
+        return {name: _plain(getattr(self, name), f"{name}") for name in self._fitted}
+
+    def _decode_fitted(self, fitted: dict[str, Any]) -> None:
+        for name in self._fitted:
+            value = fitted[name]
+            if name in self._arrays:
+                value = np.asarray(value, dtype=np.float64)
+            setattr(self, name, value)
+
+    # --- JSON round trip --------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """Parameters and, when fitted, every learned number as plain JSON values.
+
+        Raises
+        ------
+        ValueError
+            A learned number is not finite (JSON has no NaN or infinity).
+        """
+        params = {k: _plain(v, k) for k, v in self.get_params().items()}
+        fitted = self._encode_fitted() if self._is_fitted() else None
+        return {"kind": self.kind, "version": FORMAT_VERSION, "params": params, "fitted": fitted}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "Learner":
+        """Rebuild a learner written by :meth:`to_dict` (lists become tuples in params).
+
+        Raises
+        ------
+        InputError
+            Another kind, a newer format version, or missing keys.
+        """
+        if not isinstance(d, dict):
+            raise InputError(f"{cls.__name__}.from_dict: expected a dict, got {type(d).__name__}")
+        if d.get("kind") != cls.kind:
+            raise InputError(f"{cls.__name__}.from_dict: `kind` is {d.get('kind')!r}, expected {cls.kind!r}")
+        version = d.get("version")
+        if not isinstance(version, int) or version > FORMAT_VERSION:
+            raise InputError(f"{cls.__name__}.from_dict: unsupported `version` {version!r}")
+        params = d.get("params")
+        if not isinstance(params, dict):
+            raise InputError(f"{cls.__name__}.from_dict: `params` missing")
+        unknown = sorted(set(params) - set(cls._param_names()))
+        if unknown:
+            raise InputError(f"{cls.__name__}.from_dict: unknown parameter(s) {', '.join(unknown)}")
+        model = cls(**{k: _tuples(v) for k, v in params.items()})
+        fitted = d.get("fitted")
+        if fitted is not None:
+            missing = [name for name in cls._fitted if name not in fitted]
+            if missing:
+                raise InputError(f"{cls.__name__}.from_dict: `fitted` lacks {', '.join(missing)}")
+            model._decode_fitted(fitted)
+        return model
+
+
+# --- validation helpers ---------------------------------------------------
+def check_X(X: Any, name: str = "X", n_features: int | None = None) -> np.ndarray:
+    """`X` as a finite float64 array of shape (n_samples, n_features).
+
+    Raises
+    ------
+    InputError
+        Not 2-D, empty, not finite, or another number of columns than at fit.
+    """
+    try:
+        X = np.asarray(X, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise InputError(f"`{name}` is not numeric: {err}") from None
+    if X.ndim != 2:
+        raise InputError(
+            f"`{name}` must be 2-D (n_samples, n_features), got shape {X.shape}; "
+            "use X.reshape(-1, 1) for one feature"
+        )
+    if X.shape[0] == 0 or X.shape[1] == 0:
+        raise InputError(f"`{name}` is empty (shape {X.shape})")
+    bad = np.argwhere(~np.isfinite(X))
+    if bad.size:
+        row, col = bad[0]
+        raise InputError(f"`{name}` row {row} column {col}: value {X[row, col]} is not finite")
+    if n_features is not None and X.shape[1] != n_features:
+        raise InputError(f"`{name}` has {X.shape[1]} columns; the model was fitted on {n_features}")
+    return X
+
+
+def check_X_y(X: Any, y: Any, min_samples: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """`X` as :func:`check_X` and `y` as a finite 1-D float64 array of the same length."""
+    X = check_X(X)
+    try:
+        y = np.asarray(y, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise InputError(f"`y` is not numeric: {err}") from None
+    if y.ndim == 2 and y.shape[1] == 1:
+        y = y[:, 0]
+    if y.ndim != 1:
+        raise InputError(f"`y` must be 1-D (n_samples,), got shape {y.shape}")
+    if y.shape[0] != X.shape[0]:
+        raise InputError(f"`X` has {X.shape[0]} rows but `y` has {y.shape[0]}")
+    bad = np.flatnonzero(~np.isfinite(y))
+    if bad.size:
+        raise InputError(f"`y` row {bad[0]}: value {y[bad[0]]} is not finite")
+    if X.shape[0] < min_samples:
+        raise InputError(f"need at least {min_samples} samples, got {X.shape[0]}")
+    return X, y
+
+
+def check_int(owner: str, name: str, value: Any, low: int, high: int | None = None) -> int:
+    """`value` as an int in [low, high]; ``ValueError`` naming `name` otherwise."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise InputError(f"{owner}: `{name}` must be an int, got {value!r}")
+    if value < low or (high is not None and value > high):
+        upper = "" if high is None else f" and <= {high}"
+        raise InputError(f"{owner}: `{name}` must be >= {low}{upper}, got {value!r}")
+    return int(value)
+
+
+def check_float(
+    owner: str, name: str, value: Any, low: float, high: float | None = None, low_open: bool = False
+) -> float:
+    """`value` as a finite float in [low, high] (or (low, high] when `low_open`)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(f"{owner}: `{name}` must be a number, got {value!r}")
+    value = float(value)
+    below = value <= low if low_open else value < low
+    if not math.isfinite(value) or below or (high is not None and value > high):
+        bracket = "(" if low_open else "["
+        upper = "inf)" if high is None else f"{high}]"
+        raise InputError(f"{owner}: `{name}` must be in {bracket}{low}, {upper}, got {value!r}")
+    return value
+
+
+def check_choice(owner: str, name: str, value: Any, choices: tuple[str, ...]) -> str:
+    """`value` if it is one of `choices`; ``ValueError`` listing them otherwise."""
+    if value not in choices:
+        raise InputError(f"{owner}: `{name}` must be one of {', '.join(choices)}; got {value!r}")
+    return value
+
+
+def check_seed(owner: str, seed: Any) -> int | None:
+    """`seed` as None or a non-negative int."""
+    if seed is None:
+        return None
+    return check_int(owner, "seed", seed, 0)
+
+
+def block_split(
+    n_samples: int, fraction: float, rng: np.random.Generator, n_blocks: int = 20
+) -> tuple[np.ndarray, np.ndarray]:
+    """Train and validation indices: a seeded choice of contiguous blocks.
+
+    The samples are cut into `n_blocks` contiguous blocks of (nearly) equal
+    length and ``round(fraction * n_blocks)`` of them (at least one) are
+    drawn for validation. Whole blocks, not single samples, so that
+    autocorrelated neighbours of a drift recording do not straddle the
+    split and the validation error is an honest one.
+    """
+    n_blocks = min(n_blocks, n_samples)
+    n_val = max(1, int(round(fraction * n_blocks)))
+    if n_val >= n_blocks:
+        raise InputError(f"validation_fraction {fraction} leaves no training data")
+    blocks = np.array_split(np.arange(n_samples), n_blocks)
+    chosen = np.zeros(n_blocks, dtype=bool)
+    chosen[rng.choice(n_blocks, size=n_val, replace=False)] = True
+    val = np.concatenate([b for b, c in zip(blocks, chosen) if c])
+    train = np.concatenate([b for b, c in zip(blocks, chosen) if not c])
+    return train, val
+
+
+def rmse(prediction: np.ndarray, target: np.ndarray) -> float:
+    """Root-mean-square error, in the unit of `target`."""
+    return float(np.sqrt(np.mean((prediction - target) ** 2)))
+
+
+# --- JSON helpers ---------------------------------------------------------
+def _plain(value: Any, name: str) -> Any:
+    """`value` as plain JSON (lists, floats, ints, str, bool, None, dicts)."""
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist(), name)
+    if isinstance(value, dict):
+        return {str(k): _plain(v, f"{name}.{k}") for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v, name) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        value = float(value)
+        if not math.isfinite(value):
+            raise ValueError(f"`{name}` holds {value}, which JSON cannot store")
+        return value
+    return value
+
+
+def _tuples(value: Any) -> Any:
+    """JSON lists back to the tuples the ``__init__`` arguments were."""
+    if isinstance(value, list):
+        return tuple(_tuples(v) for v in value)
+    return value

@@ -1,0 +1,288 @@
+"""NSGA-II-optimised ELM: hidden size, activation and weight scale on the (RMSE, ||beta||_2) front.
+
+Zhang et al. [1] section 3.6: each individual is an ELM's hidden-node
+count (1-50), activation (sigmoid, sin, hardlim, tribas, radbas) and
+input-weight scale lambda in [0, 1]; NSGA-II [2] minimises two objectives,
+the validation RMSE and the 2-norm of the output weights ([1] eq. (25)).
+The problem is ours; NSGA-II, its mixed-variable operators and the seeding
+are pymoo's ``minimize(..., seed=)``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from gyrocomp.models._base import (
+    Learner,
+    block_split,
+    check_choice,
+    check_float,
+    check_int,
+    check_seed,
+    check_X,
+    check_X_y,
+    rmse,
+)
+from gyrocomp.models.elm import ACTIVATIONS, ELM
+from gyrocomp.errors import InputError
+
+__all__ = ["NSGA2ELM"]
+
+PICKS = ("knee", "min_rmse")
+"""How the one model is chosen from the Pareto front."""
+
+
+class NSGA2ELM(Learner):
+    """An ELM whose hyper-parameters NSGA-II picks from the (RMSE, ||beta||_2) front.
+
+    Parameters
+    ----------
+    pop_size : int, default=40
+        NSGA-II population ([1] section 4.1).
+    crossover : float, default=0.8
+        Probability that a pair of parents is recombined ([1] section 4.1):
+        SBX on the hidden size (rounded) and on lambda, uniform crossover
+        on the activation.
+    mutation : float, default=0.15
+        Probability that each variable of an offspring is mutated ([1]
+        section 4.1): polynomial mutation on hidden size (rounded) and
+        lambda, a random other choice for the activation.
+    n_gen : int, default=15
+        Generations, the initial population counting as the first ([1]
+        section 4.1: 15 iterations).
+    hidden_range : tuple of int, default=(1, 50)
+        Bounds of the hidden-node count ([1] section 3.6 says [0, 50]; an
+        ELM needs at least one node).
+    activations : tuple of str, default=("sigmoid", "sin", "hardlim", "tribas", "radbas")
+        Candidate activations ([1] section 3.6).
+    weight_scale_range : tuple of float, default=(0.0, 1.0)
+        Bounds of lambda ([1] eq. (24)).
+    validation_fraction : float, default=0.2
+        Share of the samples (contiguous blocks, seeded) on which the RMSE
+        objective is measured; each candidate is trained on the rest.
+        [1] does not state its split.
+    pick : {"knee", "min_rmse"}, default="knee"
+        ``knee``: the front member closest (Euclidean) to the ideal point
+        after scaling both objectives to [0, 1] over the front;
+        ``min_rmse``: the least validation RMSE. Ties go to the smaller RMSE.
+    ridge : float, default=0.0
+        Passed to every :class:`ELM`.
+    seed : int or None, default=None
+        Seeds the split, pymoo's NSGA-II and the ELMs' random weights.
+
+    Attributes
+    ----------
+    front_ : list of dict
+        The non-dominated members of the final population, each with
+        ``n_hidden``, ``activation``, ``weight_scale`` (lambda), ``rmse``
+        (validation, unit of y) and ``beta_norm`` (||beta||_2 of the ELM
+        trained on the training blocks), sorted by ``rmse``.
+    best_index_ : int
+        Index in ``front_`` of the picked solution.
+    elm_seed_ : int
+        The seed every candidate ELM used (common random numbers).
+    estimator_ : ELM
+        The picked hyper-parameters with ``elm_seed_``, refitted on all the
+        samples (training and validation blocks).
+    n_features_in_ : int
+
+    Notes
+    -----
+    Inputs are used as given (see :class:`ELM`: normalise them first).
+    Zhang et al. write the second objective as min ||beta||_2; its square
+    has the same Pareto set, and the knee here is computed on ||beta||_2.
+
+    References
+    ----------
+    .. [1] Z. Zhang et al., "Temperature compensation for a dual-mass MEMS
+       gyroscope based on ICEEMDAN-SE-TFPF and NSGA II-ELM", Micromachines
+       15, 609 (2024).
+    .. [2] K. Deb, A. Pratap, S. Agarwal, T. Meyarivan, "A fast and elitist
+       multiobjective genetic algorithm: NSGA-II", IEEE Trans. Evol.
+       Comput. 6(2), 182-197 (2002).
+    """
+
+    kind = "nsga2elm"
+    _fitted = ("n_features_in_", "front_", "best_index_", "elm_seed_", "estimator_")
+
+    def __init__(
+        self,
+        pop_size=40,
+        crossover=0.8,
+        mutation=0.15,
+        n_gen=15,
+        hidden_range=(1, 50),
+        activations=("sigmoid", "sin", "hardlim", "tribas", "radbas"),
+        weight_scale_range=(0.0, 1.0),
+        validation_fraction=0.2,
+        pick="knee",
+        ridge=0.0,
+        seed=None,
+    ):
+        self.pop_size = pop_size
+        self.crossover = crossover
+        self.mutation = mutation
+        self.n_gen = n_gen
+        self.hidden_range = hidden_range
+        self.activations = activations
+        self.weight_scale_range = weight_scale_range
+        self.validation_fraction = validation_fraction
+        self.pick = pick
+        self.ridge = ridge
+        self.seed = seed
+
+    def fit(self, X: Any, y: Any) -> "NSGA2ELM":
+        """Run NSGA-II, keep the front, pick one member and refit it on all data.
+
+        Parameters
+        ----------
+        X : array_like, shape (n_samples, n_features)
+        y : array_like, shape (n_samples,)
+
+        Returns
+        -------
+        self
+        """
+        X, y = check_X_y(X, y, min_samples=4)
+        self._check_params()
+        rng = np.random.default_rng(self.seed)
+        train, val = block_split(len(y), self.validation_fraction, rng)
+        pymoo_seed, elm_seed = (int(s) for s in rng.integers(0, 2**31 - 1, size=2))
+        X_val, y_val = X[val], y[val]
+        X_tr, y_tr = X[train], y[train]
+
+        def objectives(n_hidden: int, act: str, scale: float) -> tuple[float, float]:
+            elm = ELM(n_hidden, act, scale, self.ridge, seed=elm_seed).fit(X_tr, y_tr)
+            return rmse(elm.predict(X_val), y_val), elm.beta_norm_
+
+        front = _search(self, objectives, pymoo_seed)
+        self.front_ = front
+        self.best_index_ = _pick(front, self.pick)
+        chosen = front[self.best_index_]
+        self.elm_seed_ = elm_seed
+        self.estimator_ = ELM(
+            chosen["n_hidden"], chosen["activation"], chosen["weight_scale"], self.ridge, seed=elm_seed
+        ).fit(X, y)
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def predict(self, X: Any) -> np.ndarray:
+        """The picked ELM's output, shape (n_samples,), in the unit of y."""
+        self._check_fitted()
+        X = check_X(X, n_features=self.n_features_in_)
+        return self.estimator_.predict(X)
+
+    def _check_params(self) -> None:
+        owner = "NSGA2ELM"
+        check_int(owner, "pop_size", self.pop_size, 2)
+        check_float(owner, "crossover", self.crossover, 0.0, 1.0)
+        check_float(owner, "mutation", self.mutation, 0.0, 1.0)
+        check_int(owner, "n_gen", self.n_gen, 1)
+        if not isinstance(self.hidden_range, (tuple, list)) or len(self.hidden_range) != 2:
+            raise InputError(f"{owner}: `hidden_range` must be (low, high), got {self.hidden_range!r}")
+        low = check_int(owner, "hidden_range", self.hidden_range[0], 1)
+        check_int(owner, "hidden_range", self.hidden_range[1], low)
+        if not isinstance(self.activations, (tuple, list)) or not self.activations:
+            raise InputError(f"{owner}: `activations` must be a non-empty tuple, got {self.activations!r}")
+        for name in self.activations:
+            check_choice(owner, "activations", name, tuple(ACTIVATIONS))
+        if not isinstance(self.weight_scale_range, (tuple, list)) or len(self.weight_scale_range) != 2:
+            raise InputError(
+                f"{owner}: `weight_scale_range` must be (low, high), got {self.weight_scale_range!r}"
+            )
+        lo = check_float(owner, "weight_scale_range", self.weight_scale_range[0], 0.0, 1.0)
+        check_float(owner, "weight_scale_range", self.weight_scale_range[1], lo, 1.0)
+        check_float(owner, "validation_fraction", self.validation_fraction, 0.0, 0.5, low_open=True)
+        check_choice(owner, "pick", self.pick, PICKS)
+        check_float(owner, "ridge", self.ridge, 0.0)
+        check_seed(owner, self.seed)
+
+    def _encode_fitted(self) -> dict[str, Any]:
+        encoded = super()._encode_fitted()
+        encoded["estimator_"] = self.estimator_.to_dict()
+        return encoded
+
+    def _decode_fitted(self, fitted: dict[str, Any]) -> None:
+        self.n_features_in_ = int(fitted["n_features_in_"])
+        self.front_ = [dict(member) for member in fitted["front_"]]
+        self.best_index_ = int(fitted["best_index_"])
+        self.elm_seed_ = int(fitted["elm_seed_"])
+        self.estimator_ = ELM.from_dict(fitted["estimator_"])
+
+
+def _search(model: NSGA2ELM, objectives, seed: int) -> list[dict[str, Any]]:
+    """NSGA-II over (n_hidden, activation, lambda); the final non-dominated set."""
+    from pymoo.algorithms.moo.nsga2 import NSGA2, binary_tournament
+    from pymoo.core.mixed import (
+        MixedVariableDuplicateElimination,
+        MixedVariableMating,
+        MixedVariableSampling,
+    )
+    from pymoo.core.problem import ElementwiseProblem
+    from pymoo.core.variable import Choice, Integer, Real
+    from pymoo.operators.crossover.sbx import SBX
+    from pymoo.operators.crossover.ux import UX
+    from pymoo.operators.mutation.pm import PM
+    from pymoo.operators.mutation.rm import ChoiceRandomMutation
+    from pymoo.operators.repair.rounding import RoundingRepair
+    from pymoo.operators.selection.tournament import TournamentSelection
+    from pymoo.optimize import minimize
+
+    class ELMProblem(ElementwiseProblem):
+        def __init__(self):
+            variables = {
+                "n_hidden": Integer(bounds=tuple(int(v) for v in model.hidden_range)),
+                "activation": Choice(options=list(model.activations)),
+                "weight_scale": Real(bounds=tuple(float(v) for v in model.weight_scale_range)),
+            }
+            super().__init__(vars=variables, n_obj=2)
+
+        def _evaluate(self, x, out, *args, **kwargs):
+            out["F"] = list(objectives(int(x["n_hidden"]), str(x["activation"]), float(x["weight_scale"])))
+
+    p_cross, p_mut = float(model.crossover), float(model.mutation)
+    mating = MixedVariableMating(
+        selection=TournamentSelection(func_comp=binary_tournament),
+        crossover={
+            Real: SBX(prob=p_cross),
+            Integer: SBX(prob=p_cross, vtype=float, repair=RoundingRepair()),
+            Choice: UX(prob=p_cross),
+        },
+        mutation={
+            Real: PM(prob=1.0, prob_var=p_mut),
+            Integer: PM(prob=1.0, prob_var=p_mut, vtype=float, repair=RoundingRepair()),
+            Choice: ChoiceRandomMutation(prob=1.0, prob_var=p_mut),
+        },
+        eliminate_duplicates=MixedVariableDuplicateElimination(),
+    )
+    algorithm = NSGA2(
+        pop_size=model.pop_size,
+        sampling=MixedVariableSampling(),
+        mating=mating,
+        eliminate_duplicates=MixedVariableDuplicateElimination(),
+    )
+    result = minimize(ELMProblem(), algorithm, ("n_gen", model.n_gen), seed=seed, verbose=False)
+    members = [
+        {
+            "n_hidden": int(x["n_hidden"]),
+            "activation": str(x["activation"]),
+            "weight_scale": float(x["weight_scale"]),
+            "rmse": float(f[0]),
+            "beta_norm": float(f[1]),
+        }
+        for x, f in zip(np.atleast_1d(result.X), np.atleast_2d(result.F))
+    ]
+    return sorted(members, key=lambda m: (m["rmse"], m["beta_norm"], m["n_hidden"], m["activation"]))
+
+
+def _pick(front: list[dict[str, Any]], how: str) -> int:
+    """Index of the picked member of a front sorted by RMSE (see ``pick``)."""
+    if how == "min_rmse" or len(front) == 1:
+        return 0
+    F = np.array([[m["rmse"], m["beta_norm"]] for m in front])
+    span = F.max(axis=0) - F.min(axis=0)
+    span[span == 0] = 1.0
+    distance = np.hypot(*((F - F.min(axis=0)) / span).T)
+    return int(np.argmin(distance))  # first minimum: the smaller RMSE on ties
