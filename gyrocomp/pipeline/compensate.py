@@ -1,0 +1,247 @@
+"""``compensate``: apply a ``model.json`` to a recording, in ``full`` or ``causal`` mode.
+
+* ``full`` (the papers' offline parallel processing): decompose the
+  recording with the model's decomposition settings, classify the
+  components with the model's thresholds, denoise each class as the model's
+  ``[denoise]`` says, subtract each segment's predicted drift from that
+  segment, and add the segments back up (Cao et al. 2021, Fig. 5, step d:
+  SG(mixed) + drift - ANFIS predictions, noise dropped; Zhang et al. 2024,
+  section 3.7, step 4: TFPF(noise) + TFPF(mixed) + feature - ELM
+  prediction). The temperature rate is the centred estimate. For a direct
+  pipeline, ``full`` is ``rate - f(T, dT/dt)`` with the centred estimate.
+* ``causal`` (what firmware runs): ``rate - f(T, dT/dt)``, with the
+  one-sided estimate of dT/dt; nothing but the temperature model touches
+  the rate, so a true angular rate passes unchanged.
+
+``drift_model`` is the sum of the segments' predicted drifts [deg/s].
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+import pandas as pd
+
+from gyrocomp import io
+from gyrocomp.config import bind
+from gyrocomp.errors import InputError
+from gyrocomp.pipeline import rate as rate_estimator
+from gyrocomp.pipeline.settings import RateSettings
+from gyrocomp.pipeline.train import INPUTS, MODEL_SCHEMA, segments
+
+__all__ = [
+    "COMPENSATION_SCHEMA",
+    "MODES",
+    "ExtrapolationWarning",
+    "DriftModel",
+    "load_model",
+    "compensate",
+]
+
+COMPENSATION_SCHEMA = "gyrocomp.compensation"
+MODES = ("full", "causal")
+
+
+class ExtrapolationWarning(UserWarning):
+    """A recording leaves the temperature range the model was trained on."""
+
+
+@dataclasses.dataclass
+class DriftModel:
+    """A ``model.json`` made usable: the learners, the maps and the ranges.
+
+    Build with :func:`load_model`; :meth:`predict` evaluates f(T, dT/dt).
+    """
+
+    obj: dict
+    name: str
+    kind: str
+    parallel: bool
+    rate: RateSettings
+    input_offset: np.ndarray
+    input_scale: np.ndarray
+    learners: dict
+    clip_inputs: bool
+
+    @property
+    def temperature_range_c(self) -> tuple[float, float]:
+        r = self.obj["training"]["temperature_c"]
+        return float(r["min"]), float(r["max"])
+
+    @property
+    def rate_range_c_per_s(self) -> tuple[float, float]:
+        r = self.obj["training"]["temperature_rate_c_per_s"]
+        return float(r["min"]), float(r["max"])
+
+    def inputs(self, temperature_c, fs_hz: float, *, causal: bool) -> np.ndarray:
+        """[temperature, temperature rate] with the model's estimator (centred or causal)."""
+        return rate_estimator.model_inputs(temperature_c, fs_hz, self.rate, causal=causal)
+
+    def predict(self, X: np.ndarray) -> dict:
+        """Predicted drift of each modelled segment [deg/s] for inputs `X` (n_samples, 2).
+
+        With ``clip_inputs`` each input is first held inside its training range.
+        """
+        X = np.asarray(X, dtype=float)
+        if self.clip_inputs:
+            (t_lo, t_hi), (r_lo, r_hi) = self.temperature_range_c, self.rate_range_c_per_s
+            X = np.clip(X, [t_lo, r_lo], [t_hi, r_hi])
+        Xn = (X - self.input_offset) / self.input_scale
+        return {
+            segment: learner.predict(Xn) * y_scale + y_offset
+            for segment, (learner, y_offset, y_scale) in self.learners.items()
+        }
+
+
+def load_model(obj: dict, name: str = "model.json") -> DriftModel:
+    """Check a ``model.json`` object and rebuild its learners.
+
+    Raises
+    ------
+    SchemaError
+        Not a ``gyrocomp.model`` or of a newer major version.
+    InputError
+        A missing or malformed entry (named), or a learner that does not
+        rebuild.
+    """
+    from gyrocomp import models
+
+    io.check_header(obj, MODEL_SCHEMA, name)
+    try:
+        rate_table = {k: obj["rate_estimator"][k] for k in ("method", "window_s", "polyorder")}
+        rate = bind(RateSettings, rate_table, f"{name} rate_estimator")
+        norm = obj["normalisation"]
+        offset = np.asarray(norm["input_offset"], dtype=float)
+        scale = np.asarray(norm["input_scale"], dtype=float)
+        if offset.shape != (len(INPUTS),) or scale.shape != (len(INPUTS),) or not np.all(scale > 0):
+            raise InputError(f"{name}: normalisation needs {len(INPUTS)} offsets and positive scales")
+        learners = {}
+        for segment, entry in obj["segments"].items():
+            learner = models.from_dict(entry["learner"])
+            learners[segment] = (learner, float(entry["output_offset"]), float(entry["output_scale"]))
+        for key in ("temperature_c", "temperature_rate_c_per_s"):
+            float(obj["training"][key]["min"]), float(obj["training"][key]["max"])
+        kind, parallel = str(obj["kind"]), bool(obj["parallel"])
+        clip = bool(norm["clip_inputs"])
+    except (KeyError, TypeError) as err:
+        raise InputError(f"{name}: corrupted model ({type(err).__name__}: {err})") from None
+    if not learners:
+        raise InputError(f"{name}: no fitted segment")
+    return DriftModel(obj, name, kind, parallel, rate, offset, scale, learners, clip)
+
+
+def compensate(
+    recording: io.Recording,
+    model: DriftModel,
+    mode: str = "causal",
+    *,
+    seed: int | None = None,
+    workers: int = 1,
+    callback=None,
+) -> tuple[pd.DataFrame, dict]:
+    """Compensate a recording with a trained model.
+
+    Parameters
+    ----------
+    recording : gyrocomp.io.Recording
+        With ``temperature``.
+    model : DriftModel
+        From :func:`load_model`.
+    mode : {"full", "causal"}
+        See the module notes.
+    seed : int or None
+        Seed of the decomposition in ``full`` mode; default the seed the
+        training run was decomposed with.
+    workers : int
+        Processes for the decomposition.
+    callback : callable(done, total) or None
+        Progress of the decomposition.
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+        ``time``, ``rate``, ``temperature``, ``drift_model``, ``compensated``.
+    summary : dict
+        Mode, kind, the ranges met and any extrapolation (also issued as an
+        :class:`ExtrapolationWarning`), and the classes found in ``full`` mode.
+    """
+    if mode not in MODES:
+        raise InputError(f"--mode {mode!r}; choose full or causal")
+    data = recording.data
+    if "temperature" not in data.columns:
+        raise InputError(f"{recording.name}: no `temperature` column; the drift model needs it")
+    temperature = data["temperature"].to_numpy(dtype=float)
+    rate = data["rate"].to_numpy(dtype=float)
+    X = model.inputs(temperature, recording.fs_hz, causal=(mode == "causal"))
+    predicted = model.predict(X)
+    drift_model = np.sum(list(predicted.values()), axis=0)
+    summary = {"mode": mode, "kind": model.kind, "parallel": model.parallel}
+    summary["ranges"], summary["warnings"] = _ranges(recording.name, X, model)
+    if mode == "full" and model.parallel:
+        if seed is None:
+            seed = model.obj.get("settings", {}).get("decompose_seed")
+        parts, classes = _parallel_segments(rate, recording.fs_hz, model, seed, workers, callback)
+        summary["decompose_seed"] = seed
+        compensated = sum(parts.values()) - drift_model
+        summary["classes"] = classes
+    else:
+        compensated = rate - drift_model
+    frame = pd.DataFrame(
+        {
+            "time": data["time"].to_numpy(dtype=float),
+            "rate": rate,
+            "temperature": temperature,
+            "drift_model": drift_model,
+            "compensated": compensated,
+        }
+    )
+    return frame, summary
+
+
+def _parallel_segments(rate, fs_hz, model: DriftModel, seed, workers, callback):
+    from gyrocomp.classify import ClassifySettings, classify
+    from gyrocomp.decompose import DecomposeSettings, decompose
+    from gyrocomp.denoise import DenoiseSettings
+
+    settings = model.obj.get("settings", {})
+    name = model.name
+    decompose_settings = bind(DecomposeSettings, settings.get("decompose"), f"{name} settings.decompose")
+    classify_settings = bind(ClassifySettings, settings.get("classify"), f"{name} settings.classify")
+    denoise_settings = bind(DenoiseSettings, settings.get("denoise"), f"{name} settings.denoise")
+    result = decompose(rate, decompose_settings, seed=seed, workers=workers, callback=callback)
+    classes = classify(result.components, result.names, classify_settings)
+    labels = [entry["class"] for entry in classes]
+    return segments(np.asarray(result.components), labels, denoise_settings, fs_hz), classes
+
+
+def _ranges(name: str, X: np.ndarray, model: DriftModel) -> tuple[dict, list[str]]:
+    lo, hi = model.temperature_range_c
+    t_lo, t_hi = float(X[:, 0].min()), float(X[:, 0].max())
+    below, above = max(0.0, lo - t_lo), max(0.0, t_hi - hi)
+    outside = float(np.mean((X[:, 0] < lo) | (X[:, 0] > hi)))
+    r_lo, r_hi = model.rate_range_c_per_s
+    rate_outside = float(np.mean((X[:, 1] < r_lo) | (X[:, 1] > r_hi)))
+    ranges = {
+        "temperature_c": {"min": t_lo, "max": t_hi, "training_min": lo, "training_max": hi,
+                          "below_by": below, "above_by": above, "share_outside": outside},
+        "temperature_rate_c_per_s": {"min": float(X[:, 1].min()), "max": float(X[:, 1].max()),
+                                     "training_min": r_lo, "training_max": r_hi, "share_outside": rate_outside},
+    }
+    messages = []
+    if below > 0 or above > 0:
+        by = " and ".join(
+            text for text in (
+                f"{below:.3g} degC below" if below > 0 else "",
+                f"{above:.3g} degC above" if above > 0 else "",
+            ) if text
+        )
+        message = (
+            f"{name}: temperature {t_lo:.3g}..{t_hi:.3g} degC leaves the training range "
+            f"[{lo:.3g}, {hi:.3g}] degC of {model.name} by {by} ({outside:.1%} of samples); "
+            f"the model extrapolates there"
+        )
+        warnings.warn(message, ExtrapolationWarning, stacklevel=3)
+        messages.append(message)
+    return ranges, messages

@@ -1,0 +1,298 @@
+"""``run``: the whole chain for several pipelines on one training and one held-out run, scored side by side.
+
+For each method of the run config (``configs/compare.toml``):
+
+1. parallel pipelines: decompose the training run, classify its
+   components, train the segment learners; direct pipelines: train on the
+   recording itself;
+2. compensate the test run, and the test run with a known angular rate
+   added (:func:`gyrocomp.pipeline.evaluate.injected_signal`), in each mode;
+3. score: ARW and bias instability, residual temperature drift of the
+   100 s means, signal preservation, training and per-stage times.
+
+Every artefact is kept under ``DIR/<method>/``; the scores go to
+``report.json``, ``report.md`` and ``report.png``
+(:mod:`gyrocomp.pipeline.report`). Without a test run the training run is
+scored and the report says that nothing was held out.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import warnings
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from gyrocomp import io
+from gyrocomp.config import apply_overrides, bind, load_config, settings_dict
+from gyrocomp.errors import InputError
+from gyrocomp.pipeline import evaluate
+from gyrocomp.pipeline.compensate import COMPENSATION_SCHEMA, compensate, load_model
+from gyrocomp.pipeline.settings import EvaluateSettings, RunSettings, SignalSettings, pipeline_settings
+from gyrocomp.pipeline.train import file_record, train_direct, train_parallel
+
+__all__ = ["REPORT_SCHEMA", "load_run_config", "run", "decompose_and_classify", "write_compensation"]
+
+REPORT_SCHEMA = "gyrocomp.report"
+
+Progress = Callable[[str, int, int], None]
+"""``progress(stage, done, total)``: the stage's description and its progress."""
+
+
+def load_run_config(path: str | os.PathLike, overrides=()) -> tuple[RunSettings, EvaluateSettings, SignalSettings, dict]:
+    """Read a run config: its ``[run]``, ``[evaluate]`` and ``[signal]`` tables."""
+    source = str(path)
+    config = apply_overrides(load_config(path), overrides)
+    unknown = sorted(set(config) - {"run", "evaluate", "signal"})
+    if unknown:
+        raise InputError(f"{source}: unknown table {', '.join(unknown)}; a run config has [run], [evaluate], [signal]")
+    return (
+        bind(RunSettings, config.get("run"), f"{source} [run]"),
+        bind(EvaluateSettings, config.get("evaluate"), f"{source} [evaluate]"),
+        bind(SignalSettings, config.get("signal"), f"{source} [signal]"),
+        config,
+    )
+
+
+def run(
+    config_path: str | os.PathLike,
+    train_path: str | os.PathLike,
+    out_dir: str | os.PathLike,
+    *,
+    test_path: str | os.PathLike | None = None,
+    seed: int = 0,
+    workers: int = 1,
+    overrides=(),
+    columns: io.ColumnSpec = io.ColumnSpec(),
+    progress: Progress | None = None,
+) -> dict:
+    """Train, compensate and score every method of a run config.
+
+    Parameters
+    ----------
+    config_path : path-like
+        The run config (``configs/compare.toml``).
+    train_path, test_path : path-like
+        Recordings with temperature; the test run is held out from training.
+    out_dir : path-like
+        Folder for every artefact and the report.
+    seed : int
+        Seed of every random step (decompositions, learners).
+    workers : int
+        Processes for the decompositions.
+    overrides : sequence of str
+        ``table.key=value`` assignments to the run config.
+    columns : gyrocomp.io.ColumnSpec
+        Column names and units of the recordings.
+    progress : callable(stage, done, total) or None
+
+    Returns
+    -------
+    dict
+        The report (also written as ``report.json``).
+    """
+    from gyrocomp.pipeline import report
+
+    started = time.perf_counter()
+    step = progress or (lambda stage, done, total: None)
+    run_settings, eval_settings, signal_settings, _ = load_run_config(config_path, overrides)
+    out = Path(out_dir)
+    train_rec = io.read_recording(train_path, columns, require_temperature=True, min_samples=16)
+    held_out = test_path is not None
+    test_rec = io.read_recording(test_path, columns, require_temperature=True, min_samples=16) if held_out else train_rec
+    signal, parts = evaluate.injected_signal(test_rec.time_s, test_rec.fs_hz, signal_settings)
+    signal_rec = _with_signal(test_rec, signal)
+
+    rows = [_score("raw", None, test_rec.rate_dps, None, test_rec.fs_hz, eval_settings)]
+    methods = []
+    for method in run_settings.methods:
+        config, source, name = _method_config(method, run_settings.overrides)
+        folder = out / name
+        info, models = _train_method(config, source, name, train_rec, folder, seed, workers, step)
+        info["overrides"] = [o.partition(":")[2] for o in run_settings.overrides if o.partition(":")[0] == method]
+        modes = run_settings.modes if info["parallel"] else ("causal",)
+        for mode in modes:
+            outputs = {}
+            for label, rec in (("test", test_rec), ("test_signal", signal_rec)):
+                step(f"{name}: compensate {label} ({mode})", 0, 1)
+                t0 = time.perf_counter()
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    frame, summary = compensate(
+                        rec, models, mode, seed=seed, workers=workers, callback=lambda d, t, s=f"{name}: decompose {label}": step(s, d, t)
+                    )
+                info["stage_times_s"][f"compensate_{mode}_{label}"] = time.perf_counter() - t0
+                summary["warnings"] = sorted({str(w.message) for w in caught} | set(summary["warnings"]))
+                path = folder / f"compensated_{mode}_{label}.parquet"
+                write_compensation(path, frame, summary, rec, folder / "model.json", mode, seed)
+                info["artefacts"][f"compensated_{mode}_{label}"] = str(path.relative_to(out))
+                outputs[label] = frame["compensated"].to_numpy()
+                if label == "test":
+                    info.setdefault("warnings", []).extend(summary["warnings"])
+            step(f"{name}: score ({mode})", 0, 1)
+            kept = evaluate.signal_preservation(outputs["test_signal"], outputs["test"], parts)
+            rows.append(_score(name, mode, outputs["test"], kept, test_rec.fs_hz, eval_settings, info))
+        methods.append(info)
+    result = {
+        **io.artefact_header(
+            REPORT_SCHEMA,
+            inputs=[train_rec.input_record()] + ([test_rec.input_record()] if held_out else []),
+            settings={
+                "run": settings_dict(run_settings),
+                "evaluate": settings_dict(eval_settings),
+                "signal": settings_dict(signal_settings),
+                "config": str(config_path),
+                "workers": workers,
+            },
+            seed=seed,
+        ),
+        "train": _describe(train_rec),
+        "test": {**_describe(test_rec), "held_out": held_out},
+        "signal": {"rms_dps": float(np.sqrt(np.mean((signal - signal.mean()) ** 2))), "parts": list(parts)},
+        "methods": methods,
+        "rows": rows,
+    }
+    result["findings"] = report.findings(result)
+    result["total_time_s"] = time.perf_counter() - started
+    step("report", 0, 1)
+    report.write(out, result)
+    return result
+
+
+def decompose_and_classify(recording: io.Recording, config: dict, source: str, folder: Path, *, seed: int, workers: int, callback=None) -> tuple[dict, dict]:
+    """Decompose a recording and classify its components as ``gyrocomp decompose`` and ``classify`` would.
+
+    Writes ``components.parquet`` (+ ``components.json``) and ``classes.json``
+    into `folder` and returns the stage times and the paths.
+    """
+    from gyrocomp.classify import classify_artefact
+    from gyrocomp.decompose import components_artefact, decompose_recording
+
+    times, paths = {}, {}
+    t0 = time.perf_counter()
+    decomposition, settings = decompose_recording(recording, config, source, seed=seed, workers=workers, callback=callback)
+    frame, header, sidecar = components_artefact(recording, decomposition, settings, seed=seed)
+    times["decompose"] = time.perf_counter() - t0
+    paths["components"] = folder / "components.parquet"
+    io.write_table(paths["components"], frame, header)
+    io.write_json(folder / "components.json", sidecar)
+    t0 = time.perf_counter()
+    classes = classify_artefact(frame, header, config, source, inputs=[file_record(paths["components"])])
+    times["classify"] = time.perf_counter() - t0
+    paths["classes"] = folder / "classes.json"
+    io.write_json(paths["classes"], classes)
+    return times, paths
+
+
+def write_compensation(path: Path, frame, summary: dict, recording: io.Recording, model_path: Path, mode: str, seed) -> dict:
+    """Write ``compensated.parquet`` and its ``compensation.json`` sidecar (same stem).
+
+    The sidecar holds the header (inputs: the recording and the model file),
+    the summary of :func:`~gyrocomp.pipeline.compensate.compensate`, and the
+    RMS of the drift model and of the compensated rate.
+    """
+    header = io.artefact_header(
+        COMPENSATION_SCHEMA,
+        inputs=[recording.input_record(), file_record(model_path)],
+        settings={"mode": mode},
+        seed=seed,
+    )
+    io.write_table(path, frame, header)
+    figures = {
+        "n_samples": int(len(frame)),
+        "fs_hz": float(recording.fs_hz),
+        "drift_model_rms_dps": float(np.sqrt(np.mean(frame["drift_model"].to_numpy() ** 2))),
+        "rate_std_dps": float(np.std(frame["rate"].to_numpy())),
+        "compensated_std_dps": float(np.std(frame["compensated"].to_numpy())),
+    }
+    sidecar = {**header, **summary, "figures": figures}
+    io.write_json(path.with_suffix(".json"), sidecar)
+    return sidecar
+
+
+def _train_method(config, source, name, train_rec, folder: Path, seed, workers, step):
+    pipeline = pipeline_settings(config, source)
+    info = {
+        "name": name,
+        "kind": pipeline.kind,
+        "config": source,
+        "parallel": pipeline.parallel,
+        "stage_times_s": {},
+        "artefacts": {},
+    }
+    model_path = folder / "model.json"
+    t_train = time.perf_counter()
+    if pipeline.parallel:
+        times, paths = decompose_and_classify(
+            train_rec, config, source, folder, seed=seed, workers=workers,
+            callback=lambda d, t: step(f"{name}: decompose training run", d, t),
+        )
+        info["stage_times_s"].update(times)
+        step(f"{name}: train", 0, 1)
+        t0 = time.perf_counter()
+        components, header = io.read_table(paths["components"], "gyrocomp.components")
+        classes = io.read_json(paths["classes"], "gyrocomp.classes")
+        model = train_parallel(
+            components, header, classes, config, source=source, seed=seed,
+            inputs=[file_record(paths["components"]), file_record(paths["classes"])],
+        )
+        info["stage_times_s"]["train"] = time.perf_counter() - t0
+        info["artefacts"].update({k: str(Path(name) / p.name) for k, p in paths.items()})
+    else:
+        step(f"{name}: train", 0, 1)
+        t0 = time.perf_counter()
+        model = train_direct(train_rec, config, source=source, seed=seed)
+        info["stage_times_s"]["train"] = time.perf_counter() - t0
+    info["train_time_s"] = time.perf_counter() - t_train
+    io.write_json(model_path, model)
+    info["artefacts"]["model"] = str(Path(name) / "model.json")
+    return info, load_model(io.read_json(model_path, "gyrocomp.model"), str(model_path))
+
+
+def _method_config(method: str, overrides) -> tuple[dict, str, str]:
+    mine = [o.partition(":")[2] for o in overrides if o.partition(":")[0] == method]
+    config = apply_overrides(load_config(method), mine)
+    name = Path(method).stem
+    return config, method, name
+
+
+def _score(name, mode, output, kept, fs_hz, settings: EvaluateSettings, info: dict | None = None) -> dict:
+    terms = evaluate.allan_terms(output, fs_hz, settings)
+    return {
+        "method": name,
+        "mode": mode,
+        "arw": terms["arw"],
+        "bias_instability": terms["bias_instability"],
+        "allan": {"tau_s": terms["tau_s"], "adev": terms["adev"]},
+        "residual_drift": evaluate.residual_drift(output, fs_hz, settings),
+        "means_dph": (evaluate.block_means(output, fs_hz, settings.block_s) * evaluate.DPS_TO_DPH).tolist(),
+        "signal": kept,
+        "train_time_s": None if info is None else info["train_time_s"],
+    }
+
+
+def _with_signal(recording: io.Recording, signal: np.ndarray) -> io.Recording:
+    data = recording.data.copy()
+    data["rate"] = data["rate"].to_numpy() + signal
+    return io.Recording(
+        data=data,
+        name=f"{recording.name}+signal",
+        sha256=recording.sha256,
+        fs_hz=recording.fs_hz,
+        metadata=recording.metadata,
+    )
+
+
+def _describe(recording: io.Recording) -> dict:
+    temperature = recording.temperature_c
+    return {
+        "name": Path(recording.name).name,
+        "sha256": recording.sha256,
+        "n_samples": int(len(recording.data)),
+        "fs_hz": float(recording.fs_hz),
+        "duration_s": float(len(recording.data) / recording.fs_hz),
+        "temperature_c": [float(temperature.min()), float(temperature.max())],
+    }

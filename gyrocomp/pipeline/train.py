@@ -1,0 +1,298 @@
+"""``train``: fit a config's learners and write everything ``compensate`` needs (``model.json``).
+
+Two kinds of pipeline (``[pipeline] parallel``):
+
+* **parallel** (the papers): the training run has been decomposed
+  (``components.parquet``) and its components classified (``classes.json``).
+  The *drift* segment is the sum of the components classed ``drift`` (the
+  trend or residue among them); the *mixed* segment is the sum of the
+  components classed ``mixed``, denoised as ``[denoise] mixed`` says (SG in
+  Cao et al. 2021, short-window TFPF in Zhang et al. 2024). Each segment
+  with a ``[model.<segment>]`` table gets its learner, fitted against
+  (T, dT/dt): PE-LCD-ANFIS fits a 16-rule ANFIS on drift and a 4-rule ANFIS
+  on the SG-smoothed mixed segment (Cao et al. 2021, section IV-B);
+  ICEEMDAN-SE-TFPF + NSGA-II-ELM fits NSGA-II-ELM on the feature (drift)
+  segment (Zhang et al. 2024, section 3.7, step 3).
+* **direct** (the comparators BP, ELM, polynomial): the learner models the
+  recorded rate itself against (T, dT/dt), with no decomposition. Any
+  recording (or a components table, which carries ``time``, ``rate`` and
+  ``temperature``) is a valid training input.
+
+Inputs and normalisation: column 0 is the measured temperature [degC],
+column 1 its rate [degC/s] from the centred estimator of
+:mod:`gyrocomp.pipeline.rate`; "all the sequences are normalized" (Cao et
+al. 2021, section IV-B): each input is mapped linearly so that its training
+range becomes [-1, 1], and each target is centred on its mean and divided
+by its standard deviation. Both maps are stored in ``model.json``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gyrocomp import io
+from gyrocomp.config import bind, settings_dict
+from gyrocomp.errors import InputError
+from gyrocomp.pipeline import rate as rate_estimator
+from gyrocomp.pipeline.settings import (
+    model_settings,
+    pipeline_settings,
+    rate_settings,
+)
+
+__all__ = ["MODEL_SCHEMA", "INPUTS", "train_direct", "train_parallel", "segments", "file_record"]
+
+MODEL_SCHEMA = "gyrocomp.model"
+INPUTS = ("temperature_c", "temperature_rate_c_per_s")
+"""Names of the learners' input columns, in order."""
+
+
+def train_direct(recording: io.Recording, config: dict, *, source: str = "config", seed: int | None = 0) -> dict:
+    """Fit a direct pipeline's learner on a recording's rate.
+
+    Parameters
+    ----------
+    recording : gyrocomp.io.Recording
+        With ``temperature``.
+    config : dict
+        A loaded pipeline config with ``[pipeline] parallel = false``.
+    source : str
+        The config's name, used in messages and recorded in the header.
+    seed : int or None
+        Seed of every learner that takes one.
+
+    Returns
+    -------
+    dict
+        The ``model.json`` object (schema ``gyrocomp.model``).
+    """
+    pipeline = pipeline_settings(config, source)
+    if pipeline.parallel:
+        raise InputError(f"{source}: [pipeline] parallel = true needs components and classes; use train_parallel")
+    temperature = _temperature_of(recording.data, recording.name)
+    rate = recording.data["rate"].to_numpy(dtype=float)
+    settings = {"pipeline": settings_dict(pipeline)}
+    return _fit(
+        {"drift": rate},
+        temperature,
+        recording.fs_hz,
+        config,
+        source=source,
+        seed=seed,
+        settings=settings,
+        inputs=[recording.input_record()],
+        extra={"segments": {"drift": {"components": ["rate"]}}},
+    )
+
+
+def train_parallel(
+    components: "pd.DataFrame",
+    components_header: dict,
+    classes: dict,
+    config: dict,
+    *,
+    source: str = "config",
+    seed: int | None = 0,
+    inputs: list[dict] | None = None,
+) -> dict:
+    """Fit a parallel pipeline's learners on the segments of a classified decomposition.
+
+    Parameters
+    ----------
+    components : pandas.DataFrame
+        ``components.parquet``: ``time``, ``rate``, ``temperature`` and one
+        column per component named in ``components_header["components"]``.
+    components_header : dict
+        Its header (the decomposition settings and seed are copied into the
+        model so that ``compensate --mode full`` decomposes alike).
+    classes : dict
+        ``classes.json``: ``components``, a list of ``{name, entropy, class}``.
+    config : dict
+        A loaded pipeline config with ``[pipeline] parallel = true``.
+    source : str
+        The config's name.
+    seed : int or None
+        Seed of every learner that takes one.
+    inputs : list of dict
+        Header ``inputs`` records of the components and classes files.
+
+    Returns
+    -------
+    dict
+        The ``model.json`` object.
+    """
+    from gyrocomp.denoise import DenoiseSettings
+
+    pipeline = pipeline_settings(config, source)
+    if not pipeline.parallel:
+        raise InputError(f"{source}: [pipeline] parallel = false; train a direct pipeline on the recording itself")
+    names = _component_names(components, components_header)
+    labels = _class_labels(classes, names)
+    temperature = _temperature_of(components, "components")
+    fs_hz = _fs_of(components["time"].to_numpy(dtype=float))
+    denoise = bind(DenoiseSettings, config.get("denoise"), f"{source} [denoise]")
+    stack = components[list(names)].to_numpy(dtype=float).T
+    parts = segments(stack, labels, denoise, fs_hz)
+    if not any(label == "drift" for label in labels):
+        raise InputError(
+            "classes: no component is classed drift; the drift segment (trend included) is what the model learns"
+        )
+    targets = {"drift": parts["drift"]}
+    model_table = model_settings(config, source, parallel=True)
+    if "mixed" in model_table.segments:
+        targets["mixed"] = parts["mixed"]
+    settings = {
+        "pipeline": settings_dict(pipeline),
+        "decompose": components_header.get("settings", {}),
+        "decompose_seed": components_header.get("seed"),
+        "classify": classes.get("settings", {}),
+        "denoise": settings_dict(denoise),
+    }
+    members = {seg: [n for n, label in zip(names, labels) if label == seg] for seg in ("noise", "mixed", "drift")}
+    extra = {
+        "segments": {seg: {"components": members[seg]} for seg in targets},
+        "training_classes": classes.get("components"),
+    }
+    return _fit(
+        targets,
+        temperature,
+        fs_hz,
+        config,
+        source=source,
+        seed=seed,
+        settings=settings,
+        inputs=inputs or [],
+        extra=extra,
+    )
+
+
+def segments(stack: np.ndarray, labels, denoise_settings, fs_hz: float) -> dict:
+    """Sum the components of each class and denoise each sum as ``[denoise]`` says.
+
+    Parameters
+    ----------
+    stack : ndarray, shape (n_components, n_samples)
+    labels : sequence of {"noise", "mixed", "drift"}
+        One class per component.
+    denoise_settings : gyrocomp.denoise.DenoiseSettings
+    fs_hz : float
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``noise``, ``mixed``, ``drift``: the denoised segment sums [deg/s]
+        (zeros for a class without components).
+    """
+    from gyrocomp import denoise
+
+    labels = list(labels)
+    out = {}
+    for cls in ("noise", "mixed", "drift"):
+        rows = [i for i, label in enumerate(labels) if label == cls]
+        raw = stack[rows].sum(axis=0) if rows else np.zeros(stack.shape[1])
+        out[cls] = denoise.apply(raw, cls, denoise_settings, fs_hz) if rows else raw
+    return out
+
+
+def file_record(path) -> dict:
+    """The header ``inputs`` entry of an artefact file: its name and SHA-256."""
+    import hashlib
+    from pathlib import Path
+
+    path = Path(path)
+    return {"name": path.name, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
+
+
+def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, inputs, extra) -> dict:
+    rate_cfg = rate_settings(config, source)
+    pipeline = pipeline_settings(config, source)
+    model_table = model_settings(config, source, parallel=pipeline.parallel)
+    X = rate_estimator.model_inputs(temperature, fs_hz, rate_cfg)
+    lo, hi = X.min(axis=0), X.max(axis=0)
+    offset = (hi + lo) / 2
+    scale = np.where(hi > lo, (hi - lo) / 2, 1.0)
+    Xn = (X - offset) / scale
+    fitted = {}
+    for segment, y in targets.items():
+        spec = model_table.segments[segment]
+        y_offset = float(np.mean(y))
+        y_scale = float(np.std(y)) or 1.0
+        learner = spec.build(seed).fit(Xn, (y - y_offset) / y_scale)
+        prediction = learner.predict(Xn) * y_scale + y_offset
+        fitted[segment] = {
+            **extra["segments"][segment],
+            "output_offset": y_offset,
+            "output_scale": y_scale,
+            "train_rmse_dps": float(np.sqrt(np.mean((prediction - y) ** 2))),
+            "learner": learner.to_dict(),
+        }
+    settings = {**settings, "rate": settings_dict(rate_cfg), "model": model_table.to_dict()}
+    header = io.artefact_header(MODEL_SCHEMA, inputs=inputs, settings=settings, seed=seed)
+    body = {
+        "kind": pipeline.kind,
+        "parallel": pipeline.parallel,
+        "fs_hz": float(fs_hz),
+        "inputs": list(INPUTS),
+        "rate_estimator": rate_estimator.describe(rate_cfg, fs_hz),
+        "normalisation": {
+            "input_offset": offset.tolist(),
+            "input_scale": scale.tolist(),
+            "clip_inputs": model_table.clip_inputs,
+            "note": (
+                "x_normalised = (x - input_offset) / input_scale, x first held inside the training range "
+                "when clip_inputs; "
+                "y = learner(x_normalised) * output_scale + output_offset"
+            ),
+        },
+        "segments": fitted,
+        "training": {
+            "temperature_c": {"min": float(lo[0]), "max": float(hi[0])},
+            "temperature_rate_c_per_s": {"min": float(lo[1]), "max": float(hi[1])},
+            "n_samples": int(X.shape[0]),
+            "duration_s": float(X.shape[0] / fs_hz),
+        },
+    }
+    if extra.get("training_classes") is not None:
+        body["training"]["classes"] = extra["training_classes"]
+    return {**header, **body}
+
+
+def _component_names(frame, header: dict) -> list[str]:
+    names = header.get("components")
+    if not isinstance(names, list) or not names:
+        raise InputError("components: header lists no `components`; write it with `gyrocomp decompose`")
+    missing = [n for n in names if n not in frame.columns]
+    if missing:
+        raise InputError(f"components: header names column(s) {', '.join(missing)} that the table lacks")
+    return [str(n) for n in names]
+
+
+def _class_labels(classes: dict, names: list[str]) -> list[str]:
+    entries = classes.get("components")
+    if not isinstance(entries, list):
+        raise InputError("classes: no `components` list")
+    by_name = {}
+    for entry in entries:
+        if not isinstance(entry, dict) or entry.get("class") not in ("noise", "mixed", "drift"):
+            raise InputError(f"classes: bad entry {entry!r}; each needs a `name` and a `class` of noise, mixed or drift")
+        by_name[str(entry.get("name"))] = entry["class"]
+    missing = [n for n in names if n not in by_name]
+    extra = [n for n in by_name if n not in names]
+    if missing or extra:
+        raise InputError(
+            f"classes: does not match the components (missing {missing or 'none'}, unknown {extra or 'none'}); "
+            "classify the same components.parquet"
+        )
+    return [by_name[n] for n in names]
+
+
+def _temperature_of(frame, name: str) -> np.ndarray:
+    if "temperature" not in frame.columns:
+        raise InputError(f"{name}: no `temperature` column; the drift model needs the temperature")
+    return frame["temperature"].to_numpy(dtype=float)
+
+
+def _fs_of(time_s: np.ndarray) -> float:
+    if time_s.size < 2:
+        raise InputError("components: fewer than 2 samples")
+    return 1.0 / float(np.median(np.diff(time_s)))
