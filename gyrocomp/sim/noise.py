@@ -19,6 +19,7 @@ the bytes.
 from __future__ import annotations
 
 import numpy as np
+from scipy import fft as sp_fft
 
 from gyrocomp.errors import InputError
 
@@ -70,8 +71,9 @@ def flicker(n, fs_hz, bias_instability, rng):
     Spectral synthesis: complex Gaussian Fourier coefficients shaped to the
     power spectral density ``S(f) = B^2 / (2 pi f)`` of IEEE Std 952 (a
     two-sided density, like its ``N^2`` for white noise; one-sided it is
-    ``B^2 / (pi f)``) for every frequency from ``fs / n`` to ``fs / 2`` (the
-    mean is zero), then one inverse real FFT. Its Allan variance is
+    ``B^2 / (pi f)``) for every frequency from ``fs / m`` to ``fs / 2`` (the
+    mean is removed), then one inverse real FFT of the next fast length
+    (:func:`scipy.fft.next_fast_len`), truncated to `n` samples. Its Allan variance is
     ``(2 ln 2 / pi) B^2`` for ``2 / fs << tau << n / fs``, so the floor of the
     Allan deviation is ``0.664 B`` and ``B = sigma_min / 0.664``
     (REFERENCES.md 2.2).
@@ -95,17 +97,19 @@ def flicker(n, fs_hz, bias_instability, rng):
     if n < 2:
         return np.zeros(n)
     b_dps = bias_instability / 3600.0
-    f = np.fft.rfftfreq(n, d=1.0 / fs_hz)
+    m = sp_fft.next_fast_len(n, real=True)
+    f = np.fft.rfftfreq(m, d=1.0 / fs_hz)
     amplitude = np.zeros_like(f)
     # One-sided S1(f) = B^2 / (pi f); E|X_k|^2 = S1 fs n / 2 makes the
     # one-sided periodogram 2 |X_k|^2 / (fs n) equal S1 (real and imaginary
     # parts each carry half).
-    amplitude[1:] = np.sqrt(b_dps**2 / (np.pi * f[1:]) * fs_hz * n / 4.0)
+    amplitude[1:] = np.sqrt(b_dps**2 / (np.pi * f[1:]) * fs_hz * m / 4.0)
     coefficients = rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)
     coefficients *= amplitude
-    if n % 2 == 0:
+    if m % 2 == 0:
         coefficients[-1] = coefficients[-1].real * np.sqrt(2.0)
-    return np.fft.irfft(coefficients, n)
+    series = sp_fft.irfft(coefficients, m)[:n]
+    return series - series.mean()
 
 
 def random_walk(n, fs_hz, rrw, rng):
