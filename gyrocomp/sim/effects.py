@@ -53,7 +53,7 @@ def bias_polynomial(temperature_c, coefficients_dps, reference_c=25.0):
 
     Examples
     --------
-    >>> bias_polynomial([25.0, 35.0], [1e-3, 1e-5]).tolist()
+    >>> np.round(bias_polynomial([25.0, 35.0], [1e-3, 1e-5]), 6).tolist()
     [0.0, 0.011]
     """
     dt = np.asarray(temperature_c, dtype=float) - reference_c
