@@ -172,6 +172,12 @@ def test_atomic_write_leaves_nothing_on_failure(tmp_path):
     assert list(target.parent.iterdir()) == []
 
 
+def test_written_files_get_ordinary_permissions(tmp_path):
+    target = tmp_path / "out.json"
+    io.write_json(target, {"a": 1})
+    assert target.stat().st_mode & 0o777 == 0o666 & ~io._umask()
+
+
 def test_atomic_write_keeps_previous_file_on_failure(tmp_path):
     target = tmp_path / "out.json"
     io.write_json(target, {"a": 1})
