@@ -82,6 +82,11 @@ class Learner:
                 f"this {type(self).__name__} is not fitted yet; call fit(X, y) first"
             )
 
+    def _predict_input(self, X: Any) -> np.ndarray:
+        """Refuse an unfitted model, then `X` as at fit (see :func:`check_X`)."""
+        self._check_fitted()
+        return check_X(X, n_features=self.n_features_in_)
+
     def _encode_fitted(self) -> dict[str, Any]:
         return {name: _plain(getattr(self, name), f"{name}") for name in self._fitted}
 

@@ -25,7 +25,6 @@ from gyrocomp.models._base import (
     check_float,
     check_int,
     check_seed,
-    check_X,
     check_X_y,
     rmse,
 )
@@ -242,8 +241,7 @@ class ANFIS(Learner):
 
     def predict(self, X: Any) -> np.ndarray:
         """Model output for each row of `X`, shape (n_samples,), in the unit of y."""
-        self._check_fitted()
-        X = check_X(X, n_features=self.n_features_in_)
+        X = self._predict_input(X)
         Z = (X - self.input_offset_) / self.input_scale_
         return _predict(Z, self.premises_, self.consequents_, self.mf)
 

@@ -20,7 +20,6 @@ from gyrocomp.models._base import (
     check_float,
     check_int,
     check_seed,
-    check_X,
     check_X_y,
 )
 
@@ -149,8 +148,7 @@ class BPNetwork(Learner):
 
     def predict(self, X: Any) -> np.ndarray:
         """Forward pass, shape (n_samples,), in the unit of y."""
-        self._check_fitted()
-        X = check_X(X, n_features=self.n_features_in_)
+        X = self._predict_input(X)
         g = _hidden_activation(self.activation)
         a = (X - self.x_mean_) / self.x_scale_
         for w, b in zip(self.coefs_[:-1], self.intercepts_[:-1]):

@@ -20,7 +20,6 @@ from gyrocomp.models._base import (
     check_float,
     check_int,
     check_seed,
-    check_X,
     check_X_y,
 )
 
@@ -151,8 +150,7 @@ class ELM(Learner):
 
     def predict(self, X: Any) -> np.ndarray:
         """H(X) beta, shape (n_samples,), in the unit of y."""
-        self._check_fitted()
-        X = check_X(X, n_features=self.n_features_in_)
+        X = self._predict_input(X)
         return self._hidden(X) @ self.beta_
 
     @property

@@ -21,7 +21,6 @@ from gyrocomp.models._base import (
     check_float,
     check_int,
     check_seed,
-    check_X,
     check_X_y,
     rmse,
 )
@@ -170,8 +169,7 @@ class NSGA2ELM(Learner):
 
     def predict(self, X: Any) -> np.ndarray:
         """The picked ELM's output, shape (n_samples,), in the unit of y."""
-        self._check_fitted()
-        X = check_X(X, n_features=self.n_features_in_)
+        X = self._predict_input(X)
         return self.estimator_.predict(X)
 
     def _check_params(self) -> None:

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from gyrocomp.errors import InputError
-from gyrocomp.models._base import Learner, check_float, check_int, check_X, check_X_y
+from gyrocomp.models._base import Learner, check_float, check_int, check_X_y
 
 __all__ = ["PolynomialDrift"]
 
@@ -98,8 +98,7 @@ class PolynomialDrift(Learner):
 
     def predict(self, X: Any) -> np.ndarray:
         """Bias for each row of `X` (Horner's rule), shape (n_samples,)."""
-        self._check_fitted()
-        X = check_X(X, n_features=self.n_features_in_)
+        X = self._predict_input(X)
         dt = X[:, 0] - self.reference_temperature
         out = np.full(len(X), self.coef_[-1])
         for c in self.coef_[-2::-1]:
