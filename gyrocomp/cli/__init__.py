@@ -6,7 +6,7 @@ import importlib
 
 from gyrocomp.cli._app import app
 
-_COMMANDS = ("simulate",)
+_COMMANDS = ("simulate", "allan", "decompose")
 """Command modules of this package; each registers its commands on ``app``."""
 
 for _name in _COMMANDS:
