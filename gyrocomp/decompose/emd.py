@@ -283,8 +283,8 @@ def _envelope_knots(rows, imax, imin, n_ext):
     ok = n_ext >= 3
     r_max, c_max = np.nonzero(imax)
     r_min, c_min = np.nonzero(imin)
-    cut_max = np.r_[0, np.cumsum(np.bincount(r_max, minlength=rows.shape[0]))]
-    cut_min = np.r_[0, np.cumsum(np.bincount(r_min, minlength=rows.shape[0]))]
+    cut_max = np.concatenate(([0], np.cumsum(np.bincount(r_max, minlength=rows.shape[0]))))
+    cut_min = np.concatenate(([0], np.cumsum(np.bincount(r_min, minlength=rows.shape[0]))))
     v_max = rows[r_max, c_max]
     v_min = rows[r_min, c_min]
     t_parts, z_parts, sizes = [], [], []
@@ -411,10 +411,11 @@ def _splines(knots, n):
     dz = np.diff(z)
     dz[end[:-1]] = 0.0
     slope = dz / h
-    hp = np.r_[1.0, h]  # h_{i-1} at knot i
-    hn = np.r_[h, 1.0]  # h_i at knot i
-    dp = np.r_[0.0, slope]
-    dn = np.r_[slope, 0.0]
+    one, zero = np.ones(1), np.zeros(1)
+    hp = np.concatenate((one, h))  # h_{i-1} at knot i
+    hn = np.concatenate((h, one))  # h_i at knot i
+    dp = np.concatenate((zero, slope))
+    dn = np.concatenate((slope, zero))
     diag = 2.0 * (hp + hn)
     upper = hp[:-1].copy()  # coefficient of s_{i+1} in row i
     lower = hn[1:].copy()  # coefficient of s_{i-1} in row i (stored at i - 1)
