@@ -59,8 +59,8 @@ class PolynomialDrift(Learner):
     >>> T = np.linspace(-40, 60, 101)
     >>> X = np.column_stack([T, np.zeros_like(T)])
     >>> model = PolynomialDrift(rate_term=False).fit(X, 0.1 + 1e-3 * (T - 25))
-    >>> np.round(model.coef_, 6).tolist()
-    [0.1, 0.001, 0.0, 0.0]
+    >>> np.round(model.coef_[:2], 6).tolist(), bool(np.abs(model.coef_[2:]).max() < 1e-12)
+    ([0.1, 0.001], True)
     """
 
     kind = "polynomial"
