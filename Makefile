@@ -1,4 +1,5 @@
 # gyrocomp: `make run` sets up and runs the main job on sample_data/; `make test` runs the tests.
+# Tests run in two pytest-xdist workers on the two cores, each with one BLAS thread (no oversubscription).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -16,7 +17,7 @@ run: $(STAMP)
 	$(BIN)/gyrocomp allan sample_data/oven_train.parquet sample_data/oven_test.parquet --out out/allan.json --plot out/allan.png
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow" -n 2
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/python -m pytest -q -m "not slow" -n 2
 
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -q -m slow
