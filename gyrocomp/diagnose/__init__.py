@@ -1,0 +1,239 @@
+"""Diagnose the sim-to-real gap: where it lies, which effect causes it, how far it shrinks.
+
+:func:`diagnose` calibrates the baseline simulator of DESIGN.md ("The
+simulator and the sim-to-real gap": per-run offset, cubic polynomial in the
+measured temperature, white noise) on a fit recording, then
+
+1. **which** -- adds the effects of the vocabulary greedily by BIC on a
+   block-mean Gaussian likelihood in which deterministic effects are
+   regressors and flicker / random walk are covariance terms, each kept only
+   when it also improves the held-out likelihood
+   (:mod:`gyrocomp.diagnose.select`);
+2. **how far** -- measures the scalar gap of :mod:`gyrocomp.diagnose.gap`
+   for the baseline, for every candidate alone and for the selected model,
+   on the fit and on the holdout recording;
+3. **where** -- breaks the residual down by regime, timescale and EMD
+   component (:mod:`gyrocomp.diagnose.localize`).
+
+A recording without temperature (a static run) is diagnosed on its
+stochastic part and time effects only; the temperature effects are listed
+as skipped with the reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from gyrocomp.config import bind, load_config, settings_dict
+from gyrocomp.diagnose import gap as _gap
+from gyrocomp.diagnose import localize
+from gyrocomp.diagnose.effects import EFFECTS, NEEDS_TEMPERATURE, Run, TemperatureScale, effect_params
+from gyrocomp.diagnose.select import Fitted, Problem, greedy, holdout_fit, residual_of
+from gyrocomp.errors import InputError
+
+__all__ = ["DiagnoseSettings", "get_config", "diagnose", "SCHEMA", "EFFECTS"]
+
+SCHEMA = "gyrocomp.diagnosis"
+
+
+@dataclasses.dataclass(frozen=True)
+class DiagnoseSettings:
+    """The ``[diagnose]`` table; defaults equal ``configs/diagnose.toml`` (reasons there)."""
+
+    poly_degree: int = 3
+    block_s: float = 10.0
+    max_blocks: int = 720
+    bic_margin: float = 10.0
+    holdout_margin: float = 6.0
+    max_effects: int = 4
+    min_temperature_span_c: float = 2.0
+    thermal_lag_tau_s: tuple = (20.0, 7200.0)
+    warmup_tau_s: tuple = (60.0, 14400.0)
+    tau_grid_points: int = 16
+    hysteresis_deadband_c: tuple = (0.25, 0.5, 1.0, 2.0, 4.0)
+    periodic_min_blocks: float = 4.0
+    periodic_oversample: float = 3.0
+    gap_block_s: float = 100.0
+    gap_min_windows: int = 16
+    smooth_s: float = 100.0
+    warmup_window_s: float = 1800.0
+    soak_rate_c_per_min: float = 0.05
+    temperature_bin_c: float = 20.0
+    emd_max_imfs: int = 8
+    emd_max_sift: int = 50
+
+    def __post_init__(self):
+        for name in ("block_s", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks", "temperature_bin_c"):
+            if not getattr(self, name) > 0:
+                raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be > 0")
+        if not 0 <= self.poly_degree <= 3:
+            raise InputError(f"diagnose.poly_degree = {self.poly_degree!r}: the baseline is at most cubic (0..3)")
+        if self.max_blocks < 16:
+            raise InputError(f"diagnose.max_blocks = {self.max_blocks!r} must be at least 16")
+
+
+def get_config(path="diagnose") -> DiagnoseSettings:
+    """Bind the ``[diagnose]`` table of a TOML file (default: the shipped ``configs/diagnose.toml``)."""
+    return bind(DiagnoseSettings, load_config(path).get("diagnose", {}), f"{path} [diagnose]")
+
+
+def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(), *, start_effects=(), callback=None) -> dict:
+    """Diagnose the gap between recordings and the calibrated baseline simulator.
+
+    Parameters
+    ----------
+    fit : gyrocomp.io.Recording
+        The recording the model is calibrated on.
+    holdout : gyrocomp.io.Recording, optional
+        A second run of the same gyro, never used for fitting; it checks
+        every selection and measures the held-out gap.
+    settings : DiagnoseSettings
+    start_effects : sequence of str
+        Effects the starting simulator already has (``--sim``): fitted as
+        part of the baseline, not candidates.
+    callback : callable(done, total), optional
+        Progress over candidate fits.
+
+    Returns
+    -------
+    dict
+        The report body (see :func:`gyrocomp.diagnose.report.to_json`):
+        ``selected_effects``, ``gap``, ``candidates``, ``localization``,
+        ``skipped``, ``models``.
+
+    Raises
+    ------
+    InputError
+        A recording too short for the likelihood, or a holdout whose
+        temperature presence differs from the fit's.
+    """
+    from threadpoolctl import threadpool_limits
+
+    s = settings
+    unknown = [e for e in start_effects if e not in EFFECTS]
+    if unknown:
+        raise InputError(f"start effects {unknown}: not in the vocabulary {', '.join(EFFECTS)}")
+    if holdout is not None and (fit.temperature_c is None) != (holdout.temperature_c is None):
+        raise InputError(f"{holdout.name}: temperature column present in only one of the fit and holdout recordings")
+    has_temp = fit.temperature_c is not None
+    skipped = {}
+    if not has_temp:
+        reason = "no temperature column: temperature polynomial and temperature effects skipped"
+        skipped = {e: reason for e in NEEDS_TEMPERATURE}
+    else:
+        span = float(np.ptp(fit.temperature_c))
+        if span < s.min_temperature_span_c:
+            reason = f"temperature spans {span:.2f} degC < {s.min_temperature_span_c} degC: temperature effects not identifiable"
+            skipped = {e: reason for e in NEEDS_TEMPERATURE}
+    use_temp = has_temp and not skipped
+    degree = s.poly_degree if use_temp else 0
+    scale = TemperatureScale.of(fit.temperature_c) if use_temp else None
+    block_s = max(s.block_s, (len(fit.data) / fit.fs_hz) / s.max_blocks)
+    fit_p = Problem(_run(fit, block_s, use_temp), s, scale, degree)
+    hold_p = Problem(_run(holdout, block_s, use_temp), s, scale, degree) if holdout is not None else None
+    candidates = [e for e in EFFECTS if e not in skipped and e not in start_effects]
+    with threadpool_limits(limits=1, user_api="blas"):
+        start = _start_model(fit_p, start_effects)
+        selected, first_step, steps, baseline = greedy(fit_p, hold_p, candidates, callback=callback, start=start)
+        models = {"baseline": baseline, "selected": selected}
+        gaps = {name: _gaps(fit_p, hold_p, m) for name, m in models.items()}
+        cand = {}
+        for effect, model in first_step.items():
+            g = _gaps(fit_p, hold_p, model)
+            cand[effect] = {
+                "params": effect_params(effect, model.spec, model.beta, model.names, model.noise),
+                "gap_fit": g["fit"]["total"],
+                "gap_holdout": g["holdout"]["total"] if hold_p is not None else None,
+                "delta_bic": model.bic - start.bic,
+            }
+        local = _localization(fit_p, hold_p, models, gaps, s)
+    order = [e for e in selected.order if e not in start_effects]
+    return {
+        "selected_effects": order,
+        "start_effects": list(start_effects),
+        "gap": {
+            name: {
+                "fit": g["fit"]["total"],
+                "holdout": g["holdout"]["total"] if hold_p is not None else None,
+                "parts": {
+                    run: {k: g[run][k] for k in ("deterministic", "stochastic", "noise_floor")}
+                    for run in ("fit", "holdout")
+                    if g[run] is not None
+                },
+            }
+            for name, g in gaps.items()
+        },
+        "candidates": cand,
+        "selection_steps": steps,
+        "skipped": skipped,
+        "models": {name: _model_dict(m, start_effects) for name, m in models.items()},
+        "localization": local,
+        "blocks": {"block_s": fit_p.run.block_s, "n_fit": fit_p.y.size, "n_holdout": hold_p.y.size if hold_p else None},
+        "settings": settings_dict(s),
+    }
+
+
+def _run(rec, block_s, use_temp) -> Run:
+    n_per = max(1, int(round(block_s * rec.fs_hz)))
+    if len(rec.data) // n_per < 16:
+        raise InputError(
+            f"{rec.name}: {len(rec.data)} samples make {len(rec.data) // n_per} blocks of {block_s:g} s; "
+            "the diagnosis needs at least 16"
+        )
+    return Run(rec.name, rec.time_s, rec.rate_dps, rec.temperature_c if use_temp else None, rec.fs_hz, n_per)
+
+
+def _start_model(problem: Problem, start_effects) -> Fitted:
+    from gyrocomp.diagnose.select import extend, fit_baseline
+
+    model = fit_baseline(problem)
+    for effect in start_effects:
+        model = extend(problem, model, effect)
+    return model
+
+
+def _gaps(fit_p, hold_p, model):
+    s = fit_p.settings
+    r_fit = residual_of(fit_p, model)
+    out = {"fit": _gap.gap(r_fit, fit_p.run.fs_hz, model.noise, len(model.names), s.gap_block_s, s.gap_min_windows)}
+    out["fit"]["residual"] = r_fit
+    out["holdout"] = None
+    if hold_p is not None:
+        _, r_hold, n_free = holdout_fit(hold_p, model)
+        out["holdout"] = _gap.gap(r_hold, hold_p.run.fs_hz, model.noise, n_free, s.gap_block_s, s.gap_min_windows)
+        out["holdout"]["residual"] = r_hold
+    return out
+
+
+def _localization(fit_p, hold_p, models, gaps, s):
+    out = {}
+    for run_name, problem in (("fit", fit_p), ("holdout", hold_p)):
+        if problem is None:
+            continue
+        run = problem.run
+        per_model = {}
+        for name, model in models.items():
+            g = gaps[name][run_name]
+            r = g["residual"]
+            per_model[name] = {
+                "regime": localize.regimes(run.time_s, run.temperature_c, r, run.fs_hz, model.noise, s),
+                "timescale": localize.timescales(r, run.fs_hz, model.noise, g["timescale"]),
+                "component": localize.components(r, run.fs_hz, s),
+            }
+        out[run_name] = per_model
+    return out
+
+
+def _model_dict(model: Fitted, start_effects) -> dict:
+    return {
+        "effects": list(model.order),
+        "params": {e: effect_params(e, model.spec, model.beta, model.names, model.noise) for e in model.order},
+        "noise": model.noise.datasheet_units(),
+        "coefficients": dict(zip(model.names, model.beta.tolist())),
+        "deviance": model.deviance,
+        "n_params": model.n_params,
+        "bic": model.bic if math.isfinite(model.bic) else None,
+    }

@@ -1,0 +1,302 @@
+"""Gaussian likelihood of block means under a white + flicker + random-walk bias model.
+
+`gyrocomp diagnose` compares models of a recording (the baseline and the
+baseline plus effects) by one likelihood, so that a deterministic effect
+and a noise term compete on equal terms: a slow drift that a regressor
+explains is not also paid for as rate random walk, and a wander of the bias
+is not mistaken for a thermal term merely because it is slow.
+
+The recording's rate is averaged over blocks of ``T_b`` seconds (block
+means ``y_i``; the deterministic model is linear in its coefficients, so
+its block means are exact). The noise of the block means is Gaussian with
+covariance
+
+.. math:: \\Sigma = N^2 C_w + B^2 C_f + K^2 C_k
+
+* white rate noise of angle random walk ``N`` [deg/s/sqrt(Hz)]:
+  ``C_w = I / T_b`` (``N^2 / T_b`` is the Allan variance at ``T_b``);
+* flicker of bias instability ``B`` [deg/s]: ``C_f`` is the block-mean
+  covariance of a sum of first-order Gauss-Markov processes with time
+  constants three per decade from ``T_b / 10`` to ``L / (2 pi)`` and equal
+  variances, the classical approximation of 1/f noise (Keshner 1982) whose
+  Allan deviation is flat; it is scaled so that the Allan variance at
+  ``T_b`` is ``(2 ln 2 / pi) B^2`` (IEEE Std 952 Annex C, REFERENCES.md
+  2.2);
+* rate random walk ``K`` [deg/s/sqrt(s)], the bias a Wiener process from
+  power-on: ``C_k[i, j] = E[m_i m_j]`` with
+  ``E[W(s) W(t)] = min(s, t)``, exactly ``c_i`` (the centre of the earlier
+  block) off the diagonal and ``a_i + T_b / 3`` on it (``a_i`` the start of
+  block ``i``), so that the Allan variance is ``K^2 tau / 3``.
+
+For a design matrix ``X`` (offset, temperature polynomial, effects) the
+coefficients are concentrated out by generalised least squares and
+:func:`profile_deviance` returns ``-2 log L`` (maximum likelihood, Cholesky
+whitening).
+
+References
+----------
+.. [1] IEEE Std 952-1997, Annex C (Allan variance of the noise terms).
+.. [2] M. S. Keshner, "1/f noise", Proc. IEEE 70(3), 212-218 (1982).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy import linalg, optimize
+
+__all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "profile_deviance", "fit_noise"]
+
+FLICKER_AVAR = 2.0 * np.log(2.0) / np.pi
+"""Allan variance of flicker noise per unit ``B^2`` (IEEE Std 952: 0.6643^2)."""
+
+_LN_FLOOR = -60.0
+"""Lower bound of a fitted log-variance: ``exp(-60)`` is numerically zero."""
+
+
+@dataclasses.dataclass(frozen=True)
+class NoiseModel:
+    """The stochastic part of a gyro model, in SI-like units of the library.
+
+    Attributes
+    ----------
+    arw : float
+        White rate noise ``N`` [deg/s/sqrt(Hz)] (= deg/sqrt(s)).
+    bias_instability : float
+        Flicker ``B`` [deg/s]; its Allan floor is ``0.664 B``.
+    rate_random_walk : float
+        ``K`` [deg/s/sqrt(s)]; Allan variance ``K^2 tau / 3``.
+    """
+
+    arw: float
+    bias_instability: float = 0.0
+    rate_random_walk: float = 0.0
+
+    def avar(self, tau_s):
+        """Allan variance [(deg/s)^2] at `tau_s` (IEEE Std 952, REFERENCES.md 2.2)."""
+        tau = np.asarray(tau_s, dtype=float)
+        return self.arw**2 / tau + FLICKER_AVAR * self.bias_instability**2 + self.rate_random_walk**2 * tau / 3.0
+
+    def psd(self, f_hz):
+        """One-sided power spectral density [(deg/s)^2/Hz] at `f_hz` > 0.
+
+        Twice IEEE Std 952's two-sided densities ``N^2``, ``B^2 / (2 pi f)``
+        and ``K^2 / (2 pi f)^2``.
+        """
+        f = np.asarray(f_hz, dtype=float)
+        return 2.0 * (
+            self.arw**2 + self.bias_instability**2 / (2.0 * np.pi * f) + self.rate_random_walk**2 / (2.0 * np.pi * f) ** 2
+        )
+
+    def datasheet_units(self) -> dict:
+        """The terms in the units datasheets (and :mod:`gyrocomp.sim`) quote."""
+        return {
+            "arw": {"value": self.arw * 60.0, "unit": "deg/sqrt(h)"},
+            "bias_instability": {"value": self.bias_instability * 3600.0, "unit": "deg/h"},
+            "rate_random_walk": {"value": self.rate_random_walk * 3600.0 * 60.0, "unit": "deg/h/sqrt(h)"},
+        }
+
+
+def block_means(x, n_per_block):
+    """Means of consecutive blocks of `n_per_block` samples along axis 0 (the tail is dropped).
+
+    Parameters
+    ----------
+    x : array_like, shape (n,) or (n, p)
+    n_per_block : int
+
+    Returns
+    -------
+    numpy.ndarray, shape (n // n_per_block,) or (n // n_per_block, p)
+    """
+    x = np.asarray(x, dtype=float)
+    k = x.shape[0] // n_per_block
+    return x[: k * n_per_block].reshape((k, n_per_block) + x.shape[1:]).mean(axis=1)
+
+
+class NoiseBasis:
+    """The unit covariance matrices ``C_w``, ``C_f``, ``C_k`` of `n_blocks` block means.
+
+    Parameters
+    ----------
+    n_blocks : int
+        Number of blocks.
+    block_s : float
+        Block length ``T_b`` [s].
+    """
+
+    def __init__(self, n_blocks, block_s):
+        self.n_blocks = int(n_blocks)
+        self.block_s = float(block_s)
+        idx = np.arange(self.n_blocks)
+        self.white = np.eye(self.n_blocks) / self.block_s
+        start = idx * self.block_s
+        centre = start + 0.5 * self.block_s
+        earlier = np.minimum.outer(idx, idx)
+        self.random_walk = centre[earlier]
+        self.random_walk[idx, idx] = start + self.block_s / 3.0
+        self.flicker = _flicker_block_covariance(self.n_blocks, self.block_s)
+        self._eig = {}
+
+    def covariance(self, noise: NoiseModel):
+        """``Sigma = N^2 C_w + B^2 C_f + K^2 C_k``."""
+        out = noise.arw**2 * self.white
+        if noise.bias_instability:
+            out = out + noise.bias_instability**2 * self.flicker
+        if noise.rate_random_walk:
+            out = out + noise.rate_random_walk**2 * self.random_walk
+        return out
+
+    def whitener(self, noise: NoiseModel):
+        """A factorisation of ``Sigma(noise)`` for :func:`profile_deviance`.
+
+        With at most one coloured term, ``Sigma = (N^2 / T_b) I + c C`` shares
+        the eigenvectors of ``C`` (decomposed once per basis), so a new noise
+        model costs O(k) instead of a Cholesky factorisation.
+        """
+        colored = [
+            (name, value)
+            for name, value in (("flicker", noise.bias_instability), ("random_walk", noise.rate_random_walk))
+            if value
+        ]
+        white = noise.arw**2 / self.block_s
+        if not colored:
+            return _Whitener(None, np.full(self.n_blocks, white))
+        if len(colored) == 1:
+            name, value = colored[0]
+            if name not in self._eig:
+                self._eig[name] = linalg.eigh(getattr(self, name), check_finite=False)
+            lam, q = self._eig[name]
+            return _Whitener(q, white + value**2 * np.maximum(lam, 0.0))
+        return _Whitener(linalg.cholesky(self.covariance(noise), lower=True, check_finite=False), None)
+
+
+def profile_deviance(y, X, whitener):
+    """``-2 log L`` of ``y ~ N(X beta, Sigma)`` with ``beta`` at its GLS estimate.
+
+    Parameters
+    ----------
+    y : ndarray, shape (k,)
+        Block means [deg/s].
+    X : ndarray, shape (k, p)
+        Block means of the regressors.
+    whitener : object
+        ``Sigma`` factorised by :meth:`NoiseBasis.whitener`.
+
+    Returns
+    -------
+    deviance : float
+    beta : ndarray, shape (p,)
+    """
+    yw = whitener.whiten(y)
+    Xw = whitener.whiten(X)
+    beta, *_ = linalg.lstsq(Xw, yw, cond=1e-12, lapack_driver="gelsy", check_finite=False)
+    r = yw - Xw @ beta
+    return float(whitener.logdet + r @ r + y.size * np.log(2.0 * np.pi)), beta
+
+
+class _Whitener:
+    """``whiten(v) = Sigma^(-1/2) v`` from eigenvectors ``q`` and eigenvalues ``d``,
+    or from a lower Cholesky factor when ``d`` is None."""
+
+    def __init__(self, q, d):
+        self.q = q
+        self.d = d
+        if d is None:
+            self.logdet = 2.0 * float(np.sum(np.log(np.diag(q))))
+        else:
+            self.logdet = float(np.sum(np.log(d)))
+            self._scale = 1.0 / np.sqrt(d)
+
+    def whiten(self, v):
+        if self.d is None:
+            return linalg.solve_triangular(self.q, v, lower=True, check_finite=False)
+        v = v if self.q is None else self.q.T @ v
+        return v * (self._scale if v.ndim == 1 else self._scale[:, None])
+
+
+def fit_noise(y, X, basis: NoiseBasis, start: NoiseModel, free=("arw",)):
+    """Maximum-likelihood noise terms for block means `y` with regressors `X`.
+
+    The log-variances of the terms named in `free` are optimised (Nelder-Mead,
+    from `start`); the others keep their value in `start`, 0 meaning absent.
+
+    Returns
+    -------
+    noise : NoiseModel
+    deviance : float
+        ``-2 log L`` at the optimum.
+    beta : ndarray
+    """
+    names = tuple(free)
+    if names == ("arw",) and not (start.bias_instability or start.rate_random_walk):
+        # White only: Sigma = s^2 I, so the ML s^2 is the mean squared OLS residual.
+        unit = basis.whitener(NoiseModel(arw=np.sqrt(basis.block_s)))
+        _, beta = profile_deviance(y, X, unit)
+        s2 = max(float(np.mean((y - X @ beta) ** 2)), 1e-300)
+        noise = NoiseModel(arw=float(np.sqrt(s2 * basis.block_s)))
+        return noise, profile_deviance(y, X, basis.whitener(noise))[0], beta
+    x0 = np.array([np.log(max(getattr(start, name), 1e-30) ** 2) for name in names])
+    x0 = np.maximum(x0, _LN_FLOOR + 5.0)
+
+    def model(z):
+        values = dataclasses.asdict(start)
+        for name, v in zip(names, z):
+            values[name] = float(np.exp(0.5 * max(v, _LN_FLOOR)))
+        return NoiseModel(**values)
+
+    rotated = {}
+
+    def objective(z):
+        w = basis.whitener(model(z))
+        if w.d is None:
+            try:
+                return profile_deviance(y, X, w)[0]
+            except linalg.LinAlgError:
+                return np.inf
+        # Same eigenvectors for every noise model of this family: rotate once.
+        key = id(w.q)
+        if key not in rotated:
+            rotated[key] = (y, X) if w.q is None else (w.q.T @ y, w.q.T @ X)
+        yq, Xq = rotated[key]
+        return profile_deviance(yq, Xq, _Whitener(None, w.d))[0]
+
+    best = optimize.minimize(
+        objective, x0, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-3, "initial_simplex": _simplex(x0)}
+    )
+    noise = model(best.x)
+    deviance, beta = profile_deviance(y, X, basis.whitener(noise))
+    return noise, deviance, beta
+
+
+def _simplex(x0, step=2.0):
+    return np.vstack([x0] + [x0 + step * e for e in np.eye(x0.size)])
+
+
+def _flicker_block_covariance(n_blocks, block_s, per_decade=3):
+    """Block-mean covariance of unit-``B`` flicker, as a sum of Gauss-Markov processes.
+
+    Time constants run three per decade from ``T_b / 10`` to ``L / (2 pi)``:
+    the 1/f spectrum is modelled from the recording's lowest frequency
+    ``1 / L`` up (as :func:`gyrocomp.sim.noise.flicker` synthesises it), so
+    that flicker does not borrow the random walk's power below ``1 / L``.
+
+    A process with autocovariance ``exp(-|u| / T)`` has, with ``a = T_b / T``,
+    block-mean variance ``2 (a - 1 + e^-a) / a^2`` and covariance
+    ``(1 - e^-a)^2 e^-(h-1)a / a^2`` at a lag of ``h >= 1`` blocks.
+    """
+    length = n_blocks * block_s
+    exponents = np.arange(
+        np.floor(per_decade * np.log10(block_s / 10.0)), np.ceil(per_decade * np.log10(length / (2.0 * np.pi))) + 1
+    )
+    lag = np.abs(np.subtract.outer(np.arange(n_blocks), np.arange(n_blocks)))
+    cov = np.zeros((n_blocks, n_blocks))
+    for tc in 10.0 ** (exponents / per_decade):
+        a = block_s / tc
+        diag = 2.0 * (a - 1.0 + np.exp(-a)) / a**2
+        off = (-np.expm1(-a)) ** 2 / a**2 * np.exp(-(np.maximum(lag, 1) - 1) * a)
+        cov += np.where(lag == 0, diag, off)
+    # Allan variance at T_b: var - cov(lag 1), averaged over the blocks.
+    avar = np.mean(np.diag(cov)) - np.mean(np.diag(cov, 1)) if n_blocks > 1 else np.mean(np.diag(cov))
+    return cov * (FLICKER_AVAR / avar)

@@ -1,0 +1,117 @@
+"""The diagnosis as JSON (schema ``gyrocomp.diagnosis``), markdown, a rich table and a plot."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from gyrocomp.io import artefact_header, atomic_path
+
+__all__ = ["to_json", "to_markdown", "summary_table", "plot_gap"]
+
+
+def to_json(body: dict, *, inputs: list, settings: dict) -> dict:
+    """Header (:func:`gyrocomp.io.artefact_header`) + the body of :func:`gyrocomp.diagnose.diagnose`."""
+    out = artefact_header("gyrocomp.diagnosis", inputs=inputs, settings=settings, seed=None)
+    out.update({k: v for k, v in body.items() if k != "settings"})
+    out["gap_definition"] = (
+        "G = sqrt(max(0, D^2 + S - E0)): D = ln(variance of the 100 s residual means / the noise "
+        "model's expectation, Barnes B1), S = mean over octave taus of ln^2(ADEV residual / ADEV model), "
+        "E0 their expectation for a recording that is the calibrated simulation; dimensionless, 0 = no gap"
+    )
+    return out
+
+
+def to_markdown(report: dict) -> str:
+    """A short human-readable report."""
+    sel = report["selected_effects"]
+    lines = ["# Sim-to-real gap diagnosis", ""]
+    names = ", ".join(i["name"] for i in report.get("inputs", []))
+    if names:
+        lines += [f"Recordings: {names}", ""]
+    lines.append(
+        "**Selected effects:** " + (", ".join(f"`{e}`" for e in sel) if sel else "none (the baseline explains the recording)")
+    )
+    lines += ["", "| model | gap fit | gap holdout |", "|---|---|---|"]
+    for name in ("baseline", "selected"):
+        g = report["gap"][name]
+        lines.append(f"| {name} | {_fmt(g['fit'])} | {_fmt(g['holdout'])} |")
+    lines += ["", "| candidate | gap fit | gap holdout | delta BIC | parameters |", "|---|---|---|---|---|"]
+    for effect, c in report["candidates"].items():
+        params = ", ".join(f"{k} = {_fmt(v['value'])} {v['unit']}" for k, v in c["params"].items())
+        lines.append(f"| `{effect}` | {_fmt(c['gap_fit'])} | {_fmt(c['gap_holdout'])} | {_fmt(c['delta_bic'])} | {params} |")
+    if report.get("skipped"):
+        lines += ["", "Skipped:"] + [f"- `{e}`: {why}" for e, why in report["skipped"].items()]
+    loc = report["localization"].get("fit", {})
+    if loc:
+        lines += ["", "## Where (fit recording, residual 100 s RMS in deg/h)", "", "| regime | baseline | selected | noise |", "|---|---|---|---|"]
+        base, selected = loc["baseline"]["regime"], loc["selected"]["regime"]
+        for regime, v in base.items():
+            after = selected.get(regime, {}).get("rms_deg_h")
+            lines.append(f"| {regime} | {_fmt(v['rms_deg_h'])} | {_fmt(after)} | {_fmt(v['expected_rms_deg_h'])} |")
+    lines.append("")
+    lines.append(report.get("gap_definition", ""))
+    return "\n".join(lines) + "\n"
+
+
+def summary_table(report: dict):
+    """A :class:`rich.table.Table` of the gap before and after, per candidate."""
+    from rich.table import Table
+
+    sel = report["selected_effects"]
+    title = "selected: " + (", ".join(sel) if sel else "none (baseline explains the recording)")
+    table = Table(title=title)
+    for col in ("model / candidate", "gap fit", "gap holdout", "delta BIC"):
+        table.add_column(col, justify="right" if col != "model / candidate" else "left")
+    for name in ("baseline", "selected"):
+        g = report["gap"][name]
+        table.add_row(name, _fmt(g["fit"]), _fmt(g["holdout"]), "")
+    for effect, c in report["candidates"].items():
+        mark = " *" if effect in sel else ""
+        table.add_row(f"+ {effect}{mark}", _fmt(c["gap_fit"]), _fmt(c["gap_holdout"]), _fmt(c["delta_bic"]))
+    return table
+
+
+def plot_gap(report: dict, path: str | os.PathLike) -> None:
+    """Residual RMS by regime and ADEV ratio by tau, baseline vs selected, written atomically as PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    runs = [r for r in ("fit", "holdout") if r in report["localization"]]
+    fig, axes = plt.subplots(len(runs), 2, figsize=(12, 4 * len(runs)), squeeze=False)
+    for row, run in zip(axes, runs):
+        loc = report["localization"][run]
+        regimes = list(loc["baseline"]["regime"])
+        x = np.arange(len(regimes))
+        for k, (model, color) in enumerate((("baseline", "tab:red"), ("selected", "tab:blue"))):
+            vals = [loc[model]["regime"].get(r, {}).get("rms_deg_h", np.nan) for r in regimes]
+            row[0].bar(x + (k - 0.5) * 0.4, vals, width=0.4, color=color, label=model)
+        noise = [loc["baseline"]["regime"][r]["expected_rms_deg_h"] for r in regimes]
+        row[0].plot(x, noise, "k_", markersize=14, label="noise (selected model)")
+        row[0].set_xticks(x, regimes, rotation=45, ha="right", fontsize=8)
+        row[0].set_ylabel("residual 100 s RMS [deg/h]")
+        row[0].set_title(f"{run}: gap by regime")
+        row[0].legend(fontsize=8)
+        for model, color in (("baseline", "tab:red"), ("selected", "tab:blue")):
+            ts = loc[model]["timescale"]["adev"]
+            row[1].semilogx([p["tau_s"] for p in ts], [p["ratio"] for p in ts], "o-", color=color, label=model)
+        row[1].axhline(1.0, color="k", lw=0.8)
+        row[1].set_xlabel("tau [s]")
+        row[1].set_ylabel("ADEV residual / ADEV simulation")
+        row[1].set_title(f"{run}: gap by timescale (gap {_fmt(report['gap']['baseline'][run])} -> {_fmt(report['gap']['selected'][run])})")
+        row[1].legend(fontsize=8)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    plt.close(fig)
+
+
+def _fmt(v):
+    if v is None:
+        return "-"
+    if isinstance(v, float) and (abs(v) >= 1e4 or (v != 0 and abs(v) < 1e-3)):
+        return f"{v:.3g}"
+    return f"{v:.3f}" if isinstance(v, float) else str(v)
