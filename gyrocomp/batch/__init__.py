@@ -1,0 +1,280 @@
+"""``gyrocomp batch``: one stage over many recordings, incrementally, locally or on a Dask cluster.
+
+:func:`run_batch` gives every input its own folder ``DIR/<stem>/``, runs
+the command's :class:`~gyrocomp.batch.jobs.Job` on the inputs whose folder
+is not up to date (same input SHA-256, settings and gyrocomp version:
+:mod:`gyrocomp.batch.manifest`), records a failing input without stopping
+the others, and writes ``DIR/summary.csv`` and ``DIR/summary.parquet``.
+
+Exit code of a batch (:attr:`BatchResult.exit_code`)
+----------------------------------------------------
+* 2 when inputs failed and every failure was a bad input (unreadable,
+  truncated or invalid recording: :class:`~gyrocomp.errors.InputError`);
+* 1 when any failure was something else;
+* 3 when nothing failed but an input crossed a CI threshold (``--max-*``);
+* 0 otherwise (``ok`` and ``skipped`` rows only).
+
+Determinism
+-----------
+The summary is sorted by input path and holds no times, and each folder
+is written by the same stage code from the same settings, so the number of
+workers and the backend change no byte of the outputs (except the stage
+times inside a ``run`` report). The summary's ``status`` says whether the
+folder was made now (``ok``) or found up to date (``skipped``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import glob
+import hashlib
+import os
+from pathlib import Path
+from typing import Callable, Iterator, Sequence
+
+from gyrocomp.batch.jobs import JOBS, get_job, process_input
+from gyrocomp.errors import InputError
+
+__all__ = ["BatchResult", "run_batch", "expand_inputs", "folder_names", "SUMMARY_SCHEMA", "JOBS"]
+
+SUMMARY_SCHEMA = "gyrocomp.batch"
+BASE_COLUMNS = ("input", "output", "status", "error", "threshold", "sha256")
+"""Leading columns of the summary; the command's key figures follow."""
+
+
+@dataclasses.dataclass
+class BatchResult:
+    """What a batch did.
+
+    Attributes
+    ----------
+    command : str
+    rows : list of dict
+        One per input, sorted by input path: the :data:`BASE_COLUMNS` and
+        the command's key figures.
+    columns : list of str
+        Column order of the summary.
+    exit_code : int
+        See the module docstring.
+    """
+
+    command: str
+    rows: list
+    columns: list
+    exit_code: int
+
+    def count(self, status: str) -> int:
+        """Number of rows of a status (``ok``, ``skipped``, ``failed``)."""
+        return sum(row["status"] == status for row in self.rows)
+
+    @property
+    def thresholds(self) -> int:
+        """Number of inputs that crossed a CI threshold."""
+        return sum(bool(row["threshold"]) for row in self.rows)
+
+    def frame(self):
+        """The summary as a pandas DataFrame."""
+        import pandas as pd
+
+        return pd.DataFrame(self.rows, columns=self.columns)
+
+
+def run_batch(
+    command: str,
+    inputs: Sequence[str | os.PathLike],
+    out_dir: str | os.PathLike,
+    *,
+    options: dict | None = None,
+    files: dict | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    progress: Callable[[int, int], None] | None = None,
+) -> BatchResult:
+    """Run a command over many recordings, one output folder each.
+
+    Parameters
+    ----------
+    command : {"allan", "compensate", "run"}
+        The stage (:data:`gyrocomp.batch.jobs.JOBS`).
+    inputs : sequence of path-like or glob patterns
+        Recordings; patterns are expanded (``**`` recurses).
+    out_dir : path-like
+        Folder of the per-input folders and the summary; created.
+    options : dict
+        The command's options by Python name (e.g. ``{"max_arw": 1.0}``);
+        omitted ones take the command's defaults.
+    files : dict
+        Files the command needs: ``model`` (compensate), ``config`` (run:
+        the run config; allan: the ``[allan]`` TOML).
+    workers : int or None
+        Local worker processes (``None``: every core; 1 runs in this process).
+    scheduler : str or dask.distributed.Client or None
+        Run on this Dask cluster instead of locally.
+    progress : callable(done, total) or None
+
+    Returns
+    -------
+    BatchResult
+        Also written as ``summary.csv`` and ``summary.parquet`` in `out_dir`.
+    """
+    from gyrocomp.batch import backends
+    from gyrocomp.batch import manifest as mf
+
+    job = get_job(command)
+    out = Path(out_dir)
+    paths = [p for p in expand_inputs(inputs) if not _inside(p, out)]
+    if not paths:
+        raise InputError(f"batch: no recording matches {', '.join(map(str, inputs)) or '(nothing given)'}")
+    chosen = _options(job, options or {})
+    files = {key: _absolute(value) for key, value in (files or {}).items() if value is not None}
+    settings = job.resolve(chosen, files)
+    out.mkdir(parents=True, exist_ok=True)
+    names = folder_names(paths)
+    tasks = [
+        {"command": command, "input": p, "path": os.path.abspath(p), "name": names[p], "out_dir": os.path.abspath(out), "settings": settings, "files": files}
+        for p in paths
+    ]
+    report = progress or (lambda done, total: None)
+    outcomes = []
+    with _lock(out):
+        mf.remove_leftovers(out)
+        report(0, len(tasks))
+        if scheduler is not None:
+            results = backends.run_dask(process_input, tasks, scheduler=scheduler)
+        else:
+            results = backends.run_local(process_input, tasks, workers=workers)
+        for task, result in results:
+            if isinstance(result, BaseException):
+                result = _worker_died(task, result)
+            outcomes.append(result)
+            report(len(outcomes), len(tasks))
+    result = _summarise(command, outcomes)
+    _write_summary(out, result, settings)
+    return result
+
+
+def expand_inputs(patterns: Sequence[str | os.PathLike]) -> list[str]:
+    """Expand glob patterns (``**`` recurses) into sorted, distinct file paths.
+
+    A pattern without wildcards names a file (which need not exist: it is
+    then reported as a failed input). Hidden files are left out.
+    """
+    found = set()
+    for pattern in patterns:
+        pattern = os.fspath(pattern)
+        if glob.has_magic(pattern):
+            found.update(p for p in glob.glob(pattern, recursive=True) if not os.path.isdir(p))
+        else:
+            found.add(pattern)
+    return sorted(found)
+
+
+def folder_names(paths: Sequence[str]) -> dict[str, str]:
+    """Output folder name of each input: its stem; stems shared by several inputs get a hash suffix.
+
+    ``a/x.csv`` and ``b/x.csv`` become ``x-<8 hex>`` each, the hex the start
+    of the SHA-256 of the path as given, so a name depends on nothing but
+    the inputs that share its stem.
+    """
+    stems = {}
+    for p in paths:
+        stems.setdefault(Path(p).stem, []).append(p)
+    names = {}
+    for stem, members in stems.items():
+        for p in members:
+            suffix = "" if len(members) == 1 else "-" + hashlib.sha256(os.fspath(p).encode()).hexdigest()[:8]
+            names[p] = _safe(stem) + suffix
+    return names
+
+
+def _safe(stem: str) -> str:
+    name = stem.lstrip(".") or "input"
+    return name if name not in (".", "..") else "input"
+
+
+def _inside(path: str, folder: Path) -> bool:
+    try:
+        Path(os.path.abspath(path)).relative_to(os.path.abspath(folder))
+    except ValueError:
+        return False
+    return True
+
+
+def _absolute(value) -> str:
+    """An existing file as an absolute path (workers may run elsewhere); a bare config name as is."""
+    return os.path.abspath(value) if os.path.exists(value) else os.fspath(value)
+
+
+def _options(job, given: dict) -> dict:
+    unknown = sorted(set(given) - set(job.options))
+    if unknown:
+        names = ", ".join("--" + key.replace("_", "-") for key in unknown)
+        raise InputError(f"batch {job.name}: {names} not available in a batch; it passes {', '.join('--' + k.replace('_', '-') for k in job.options)}")
+    return {**job.options, **given}
+
+
+def _worker_died(task: dict, err: BaseException) -> dict:
+    message = " ".join(str(err).split()) or type(err).__name__
+    return {
+        "input": task["input"],
+        "output": task["name"],
+        "status": "failed",
+        "error": f"worker died: {type(err).__name__}: {message}",
+        "exit_code": 1,
+        "threshold": "",
+        "sha256": "",
+        "figures": {},
+    }
+
+
+def _summarise(command: str, outcomes: list[dict]) -> BatchResult:
+    outcomes = sorted(outcomes, key=lambda o: o["input"])
+    figure_columns = []
+    for outcome in outcomes:
+        figure_columns += [key for key in outcome["figures"] if key not in figure_columns]
+    rows = []
+    for outcome in outcomes:
+        row = {key: outcome.get(key, "") for key in BASE_COLUMNS}
+        row.update({key: outcome["figures"].get(key) for key in figure_columns})
+        rows.append(row)
+    failures = [o["exit_code"] for o in outcomes if o["status"] == "failed"]
+    if failures:
+        code = 2 if all(c == 2 for c in failures) else 1
+    elif any(o["threshold"] for o in outcomes):
+        code = 3
+    else:
+        code = 0
+    return BatchResult(command=command, rows=rows, columns=[*BASE_COLUMNS, *figure_columns], exit_code=code)
+
+
+def _write_summary(out: Path, result: BatchResult, settings: dict) -> None:
+    from gyrocomp import io
+
+    frame = result.frame()
+    header = io.artefact_header(
+        SUMMARY_SCHEMA,
+        inputs=[{"name": row["input"], "sha256": row["sha256"]} for row in result.rows],
+        settings={"command": result.command, **settings},
+    )
+    io.write_table(out / "summary.parquet", frame, header)
+    io.write_table(out / "summary.csv", frame, header)
+
+
+@contextlib.contextmanager
+def _lock(out: Path) -> Iterator[None]:
+    """Hold ``OUT/.batch.lock`` so that two batches never write one folder at once."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield
+        return
+    with open(out / ".batch.lock", "w") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise InputError(f"{out}: another gyrocomp batch is writing this folder") from None
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
