@@ -277,9 +277,9 @@ def recording_from_frame(
         )
     nominal = float(np.median(dt)) if dt.size else 1.0
     if dt.size:
-        deviation = np.abs(dt - nominal)
-        worst = int(np.argmax(deviation))
-        if deviation[worst] > jitter_tolerance * nominal:
+        # the largest |dt - nominal| is at the largest or the smallest interval
+        worst = int(np.argmax(dt)) if dt.max() - nominal >= nominal - dt.min() else int(np.argmin(dt))
+        if abs(dt[worst] - nominal) > jitter_tolerance * nominal:
             if not resample:
                 raise InputError(
                     f"{locate(worst + 1)}: sampling interval {dt[worst]:.6g} s in "
@@ -288,7 +288,7 @@ def recording_from_frame(
                     f"a uniform grid"
                 )
             out = _resample(out, nominal)
-    data = pd.DataFrame(out)
+    data = pd.DataFrame(out, copy=False)  # one block per column: no 2-D stacking copy
     if sha256 is None:
         sha256 = hashlib.sha256(frame.to_csv(index=False).encode()).hexdigest()
     return Recording(
