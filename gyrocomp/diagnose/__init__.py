@@ -50,6 +50,7 @@ class DiagnoseSettings:
     holdout_margin: float = 6.0
     max_effects: int = 4
     min_temperature_span_c: float = 2.0
+    temp_rate_smooth_s: float = 60.0
     thermal_lag_tau_s: tuple = (20.0, 7200.0)
     warmup_tau_s: tuple = (60.0, 14400.0)
     tau_grid_points: int = 16
@@ -132,8 +133,8 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
     degree = s.poly_degree if use_temp else 0
     scale = TemperatureScale.of(fit.temperature_c) if use_temp else None
     block_s = max(s.block_s, (len(fit.data) / fit.fs_hz) / s.max_blocks)
-    fit_p = Problem(_run(fit, block_s, use_temp), s, scale, degree)
-    hold_p = Problem(_run(holdout, block_s, use_temp), s, scale, degree) if holdout is not None else None
+    fit_p = Problem(_run(fit, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree)
+    hold_p = Problem(_run(holdout, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree) if holdout is not None else None
     candidates = [e for e in EFFECTS if e not in skipped and e not in start_effects]
     with threadpool_limits(limits=1, user_api="blas"):
         start = _start_model(fit_p, start_effects)
@@ -176,14 +177,15 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
     }
 
 
-def _run(rec, block_s, use_temp) -> Run:
+def _run(rec, block_s, use_temp, smooth_s) -> Run:
     n_per = max(1, int(round(block_s * rec.fs_hz)))
     if len(rec.data) // n_per < 16:
         raise InputError(
             f"{rec.name}: {len(rec.data)} samples make {len(rec.data) // n_per} blocks of {block_s:g} s; "
             "the diagnosis needs at least 16"
         )
-    return Run(rec.name, rec.time_s, rec.rate_dps, rec.temperature_c if use_temp else None, rec.fs_hz, n_per)
+    temperature = rec.temperature_c if use_temp else None
+    return Run(rec.name, rec.time_s, rec.rate_dps, temperature, rec.fs_hz, n_per, smooth_s)
 
 
 def _start_model(problem: Problem, start_effects) -> Fitted:

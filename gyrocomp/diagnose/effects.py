@@ -41,6 +41,9 @@ __all__ = [
     "N_PARAMS",
     "Run",
     "design",
+    "polynomial_columns",
+    "effect_columns",
+    "periodic_block_means",
     "effect_params",
 ]
 
@@ -81,6 +84,9 @@ class Run:
     fs_hz : float
     n_per_block : int
         Samples per block of the likelihood.
+    rate_smooth_s : float
+        Savitzky-Golay window of dT/dt [s] (:func:`gyrocomp.sim.effects.temperature_rate`):
+        a measured temperature is noisy and quantised.
     """
 
     name: str
@@ -89,6 +95,7 @@ class Run:
     temperature_c: np.ndarray | None
     fs_hz: float
     n_per_block: int
+    rate_smooth_s: float = 0.0
 
     @property
     def block_s(self) -> float:
@@ -130,38 +137,60 @@ def design(run: Run, spec: dict, poly_degree: int, scale: TemperatureScale | Non
     names : list of str
         Column names; ``offset`` first.
     """
-    t = run.time_s
-    cols = [np.ones_like(t)]
-    names = ["offset"]
-    if run.temperature_c is not None and poly_degree > 0:
-        temperature = run.temperature_c
-        if "thermal_lag" in spec:
-            temperature = shapes.element_temperature(t, temperature, spec["thermal_lag"]["tau_s"])
-        z = (temperature - scale.centre_c) / scale.half_range_c
-        for k in range(1, poly_degree + 1):
-            cols.append(z**k)
-            names.append(f"temperature^{k}")
+    parts = [(np.ones((run.time_s.size, 1)), ["offset"])]
+    if "thermal_lag" not in spec:
+        parts.append(polynomial_columns(run, None, poly_degree, scale))
     for effect in DETERMINISTIC:
-        if effect not in spec or effect == "thermal_lag":
-            continue
-        p = spec[effect]
-        if effect == "temp_rate":
-            cols.append(shapes.temperature_rate(t, run.temperature_c))
-            names.append("temp_rate")
-        elif effect == "hysteresis":
-            cols.append(shapes.hysteresis_branch(t, run.temperature_c, p["deadband_c"]))
-            names.append("hysteresis")
-        elif effect == "warmup":
-            cols.append(shapes.warmup(t, 1.0, p["tau_s"]))
-            names.append("warmup")
-        elif effect == "rate_ramp":
-            cols.append(shapes.rate_ramp(t, 1.0 / _HOUR))
-            names.append("rate_ramp")
-        else:
-            cols.append(shapes.periodic(t, 1.0, p["period_s"], 0.0))
-            cols.append(shapes.periodic(t, 1.0, p["period_s"], 0.5 * np.pi))
-            names += ["periodic_sin", "periodic_cos"]
-    return np.column_stack(cols), names
+        if effect in spec:
+            parts.append(effect_columns(run, effect, spec[effect], poly_degree, scale))
+    return np.hstack([p[0] for p in parts]), [n for p in parts for n in p[1]]
+
+
+def polynomial_columns(run: Run, tau_s, poly_degree, scale):
+    """``T~^k``, k = 1..degree, of the measured temperature or (``tau_s``) of the element's."""
+    if run.temperature_c is None or poly_degree == 0:
+        return np.empty((run.time_s.size, 0)), []
+    temperature = run.temperature_c
+    if tau_s is not None:
+        temperature = shapes.element_temperature(run.time_s, temperature, tau_s)
+    z = (temperature - scale.centre_c) / scale.half_range_c
+    return np.column_stack([z**k for k in range(1, poly_degree + 1)]), [f"temperature^{k}" for k in range(1, poly_degree + 1)]
+
+
+def effect_columns(run: Run, effect: str, params: dict, poly_degree=3, scale=None):
+    """Full-rate columns of one deterministic effect (``thermal_lag``: the lagged polynomial)."""
+    t = run.time_s
+    if effect == "thermal_lag":
+        return polynomial_columns(run, params["tau_s"], poly_degree, scale)
+    if effect == "temp_rate":
+        col = shapes.temperature_rate(t, run.temperature_c, smooth_s=run.rate_smooth_s)
+    elif effect == "hysteresis":
+        col = shapes.hysteresis_branch(t, run.temperature_c, params["deadband_c"])
+    elif effect == "warmup":
+        col = shapes.warmup(t, 1.0, params["tau_s"])
+    elif effect == "rate_ramp":
+        col = shapes.rate_ramp(t, 1.0 / _HOUR)
+    else:
+        sin = shapes.periodic(t, 1.0, params["period_s"], 0.0)
+        cos = shapes.periodic(t, 1.0, params["period_s"], 0.5 * np.pi)
+        return np.column_stack([sin, cos]), ["periodic_sin", "periodic_cos"]
+    return col[:, None], [effect]
+
+
+def periodic_block_means(run: Run, period_s):
+    """Block means of ``sin`` and ``cos(2 pi t / P)``, in closed form.
+
+    For ``m`` samples ``t_c + (k - (m-1)/2) h`` the mean of ``exp(i w t)`` is
+    ``exp(i w t_c) sin(m w h / 2) / (m sin(w h / 2))`` (Dirichlet kernel), so
+    a period grid costs O(blocks) per period instead of O(samples).
+    """
+    m = run.n_per_block
+    h = 1.0 / run.fs_hz
+    centre = run.time_s[: run.n_blocks * m].reshape(run.n_blocks, m).mean(axis=1)
+    w = 2.0 * np.pi / period_s
+    half = 0.5 * w * h
+    kernel = 1.0 if abs(np.sin(half)) < 1e-15 else np.sin(m * half) / (m * np.sin(half))
+    return np.column_stack([np.sin(w * centre), np.cos(w * centre)]) * kernel
 
 
 def effect_params(effect: str, spec: dict, beta: np.ndarray, names: list, noise) -> dict:

@@ -263,7 +263,7 @@ def fit_noise(y, X, basis: NoiseBasis, start: NoiseModel, free=("arw",)):
         return profile_deviance(yq, Xq, _Whitener(None, w.d))[0]
 
     best = optimize.minimize(
-        objective, x0, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-3, "initial_simplex": _simplex(x0)}
+        objective, x0, method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 1e-2, "initial_simplex": _simplex(x0)}
     )
     noise = model(best.x)
     deviance, beta = profile_deviance(y, X, basis.whitener(noise))

@@ -31,9 +31,18 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy import optimize
+from scipy import linalg, optimize
 
-from gyrocomp.diagnose.effects import DETERMINISTIC, N_PARAMS, PER_RUN, Run, TemperatureScale, design
+from gyrocomp.diagnose.effects import (
+    DETERMINISTIC,
+    N_PARAMS,
+    PER_RUN,
+    Run,
+    TemperatureScale,
+    design,
+    effect_columns,
+    periodic_block_means,
+)
 from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 
 __all__ = ["Fitted", "Problem", "fit_baseline", "extend", "holdout_fit", "greedy"]
@@ -212,26 +221,43 @@ def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, sta
 
 
 def _best_nonlinear(problem: Problem, current: Fitted, effect: str) -> dict:
-    """Grid search (then bounded refinement in log scale) of the effect's nonlinear parameter."""
+    """Grid search (then bounded refinement in log scale) of the effect's nonlinear parameter.
+
+    The noise is held at the current model's; the other columns are block-averaged once.
+    """
     s = problem.settings
-    w = problem.basis.whitener(current.noise)
-    length_s = problem.run.n_blocks * problem.run.block_s
-
-    def deviance(spec_value):
-        spec = dict(current.spec)
-        spec[effect] = spec_value
-        Xb, _ = problem.design_blocks(spec)
-        return profile_deviance(problem.y, Xb, w)[0]
-
+    run = problem.run
     if effect in ("temp_rate", "rate_ramp"):
         return {}
+    w = problem.basis.whitener(current.noise)
+    length_s = run.n_blocks * run.block_s
+    X, names = design(run, current.spec, problem.poly_degree, problem.scale)
+    if effect == "thermal_lag":
+        keep = [i for i, n in enumerate(names) if not n.startswith("temperature^")]
+        X = X[:, keep]
+    # Whitening is linear: whiten the fixed columns and y once, then only the candidate's.
+    base_w = w.whiten(block_means(X, run.n_per_block))
+    y_w = w.whiten(problem.y)
+    constant = w.logdet + problem.y.size * np.log(2.0 * np.pi)
+
+    def deviance(params):
+        if effect == "periodic":
+            cols = periodic_block_means(run, params["period_s"])
+        else:
+            full, _ = effect_columns(run, effect, params, problem.poly_degree, problem.scale)
+            cols = block_means(full, run.n_per_block)
+        Xw = np.hstack([base_w, w.whiten(cols)])
+        beta, *_ = linalg.lstsq(Xw, y_w, cond=1e-12, lapack_driver="gelsy", check_finite=False)
+        r = y_w - Xw @ beta
+        return constant + float(r @ r)
+
     if effect == "hysteresis":
         grid = [float(v) for v in s.hysteresis_deadband_c]
         values = [deviance({"deadband_c": v}) for v in grid]
         return {"deadband_c": grid[int(np.argmin(values))]}
     if effect == "periodic":
         f_lo = 2.0 / length_s
-        f_hi = 1.0 / (s.periodic_min_blocks * problem.run.block_s)
+        f_hi = 1.0 / (s.periodic_min_blocks * run.block_s)
         grid = 1.0 / np.arange(f_lo, f_hi, 1.0 / (s.periodic_oversample * length_s))
         key = "period_s"
     else:
@@ -240,8 +266,7 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str) -> dict:
         key = "tau_s"
     values = np.array([deviance({key: float(v)}) for v in grid])
     i = int(np.argmin(values))
-    lo_i, hi_i = max(i - 1, 0), min(i + 1, grid.size - 1)
-    a, b = sorted((np.log(grid[lo_i]), np.log(grid[hi_i])))
+    a, b = sorted((np.log(grid[max(i - 1, 0)]), np.log(grid[min(i + 1, grid.size - 1)])))
     if b > a:
         best = optimize.minimize_scalar(
             lambda z: deviance({key: float(np.exp(z))}), bounds=(a, b), method="bounded", options={"xatol": 1e-3}

@@ -1,0 +1,29 @@
+"""The scalar gap: Barnes' bias functions and its null behaviour."""
+
+import numpy as np
+from numpy.testing import assert_allclose
+
+from gyrocomp.diagnose.gap import barnes_b1, gap
+from gyrocomp.diagnose.likelihood import NoiseModel
+from gyrocomp.sim import noise as sim_noise
+
+
+def test_barnes_b1_published_values():
+    """NBS TN 375: B1(N, mu=1) = N/2 (random walk FM), B1(N, 0) = N ln N / (2 (N-1) ln 2)."""
+    assert_allclose(barnes_b1(10, 1), 5.0)
+    assert_allclose(barnes_b1(2, 0), 1.0)
+    # mu = 0 is the limit of the general formula.
+    assert_allclose(barnes_b1(64, 0), barnes_b1(64, 1e-7), rtol=1e-5)
+
+
+def test_gap_is_small_for_the_simulation_itself_and_large_for_drift():
+    rng = np.random.default_rng(5)
+    fs, n = 2.0, 4 * 3600 * 2
+    noise = NoiseModel(arw=1 / 60)
+    x = sim_noise.white(n, fs, 1.0, rng)
+    null = gap(x, fs, noise)
+    assert null["total"] < 0.1
+    t = np.arange(n) / fs
+    drifted = gap(x + 0.005 * np.sin(2 * np.pi * t / 3000.0), fs, noise)
+    assert drifted["total"] > 0.5
+    assert drifted["deterministic"] > 0.5

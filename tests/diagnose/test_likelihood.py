@@ -1,0 +1,75 @@
+"""The block-mean likelihood: covariances against exact and IEEE Std 952 values."""
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from scipy import stats
+
+from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+from gyrocomp.sim import noise as sim_noise
+
+
+def _avar_of_blocks(cov, lag_blocks):
+    """Allan variance at lag_blocks * T_b from a block-mean covariance (stationary part)."""
+    m = lag_blocks
+    k = cov.shape[0] // m * m
+    # Means of m consecutive blocks, then half the mean squared difference.
+    w = np.zeros((k // m, cov.shape[0]))
+    for i in range(k // m):
+        w[i, i * m : (i + 1) * m] = 1.0 / m
+    c = w @ cov @ w.T
+    d = np.diag(c)[:-1] + np.diag(c)[1:] - 2 * np.diag(c, 1)
+    return 0.5 * d.mean()
+
+
+def test_ieee_read_offs():
+    """REFERENCES.md 2.2: sigma(1 s) = N for white, sigma(3 s) = K for RRW, floor 0.6643 B."""
+    assert_allclose(np.sqrt(NoiseModel(arw=0.02).avar(1.0)), 0.02)
+    assert_allclose(np.sqrt(NoiseModel(arw=0.0, rate_random_walk=3e-5).avar(3.0)), 3e-5)
+    assert_allclose(np.sqrt(NoiseModel(arw=0.0, bias_instability=1.0).avar(100.0)), 0.66428, rtol=1e-4)
+
+
+def test_flicker_basis_is_flat_in_allan():
+    """The Gauss-Markov sum has the IEEE flicker floor at T_b and stays within 10 % over a decade."""
+    basis = NoiseBasis(400, 10.0)
+    for lag in (1, 3, 10):
+        assert_allclose(_avar_of_blocks(basis.flicker, lag), FLICKER_AVAR, rtol=0.1)
+
+
+def test_random_walk_basis_exact():
+    """E[m_0^2] = T_b / 3 for a Wiener process from 0; Allan variance K^2 tau / 3 at every lag."""
+    basis = NoiseBasis(200, 5.0)
+    assert_allclose(basis.random_walk[0, 0], 5.0 / 3.0)
+    for lag in (1, 4):
+        assert_allclose(_avar_of_blocks(basis.random_walk, lag), 5.0 * lag / 3.0, rtol=1e-12)
+
+
+def test_whitener_paths_agree_with_scipy():
+    """-2 log L from the eigen and Cholesky paths equals scipy's multivariate normal at the GLS beta."""
+    rng = np.random.default_rng(3)
+    basis = NoiseBasis(60, 20.0)
+    y = rng.standard_normal(60) * 0.01
+    X = np.column_stack([np.ones(60), np.linspace(-1, 1, 60)])
+    for noise in (
+        NoiseModel(arw=0.03),
+        NoiseModel(arw=0.03, bias_instability=0.002),
+        NoiseModel(arw=0.03, rate_random_walk=1e-4),
+        NoiseModel(arw=0.03, bias_instability=0.002, rate_random_walk=1e-4),
+    ):
+        dev, beta = profile_deviance(y, X, basis.whitener(noise))
+        ref = -2 * stats.multivariate_normal(X @ beta, basis.covariance(noise)).logpdf(y)
+        assert_allclose(dev, ref, rtol=1e-9)
+
+
+@pytest.mark.parametrize("b_deg_h", [20.0])
+def test_fit_noise_recovers_bias_instability(b_deg_h):
+    """ML on block means of simulated white + flicker noise recovers B within 25 %."""
+    rng = np.random.default_rng(11)
+    fs, n = 1.0, 6 * 3600
+    x = sim_noise.white(n, fs, 1.0, rng) + sim_noise.flicker(n, fs, b_deg_h, rng)
+    y = block_means(x, 20)
+    basis = NoiseBasis(y.size, 20.0)
+    start = NoiseModel(arw=1 / 60, bias_instability=1e-3)
+    noise, _, _ = fit_noise(y, np.ones((y.size, 1)), basis, start, ("arw", "bias_instability"))
+    assert_allclose(noise.bias_instability * 3600, b_deg_h, rtol=0.25)
+    assert_allclose(noise.arw * 60, 1.0, rtol=0.1)
