@@ -4,13 +4,15 @@ Both read the same 10^7-sample Parquet recording (100 Hz, white + random-walk
 rate) and compute the octave overlapping Allan deviation; gyrocomp also
 identifies the noise, computes confidence intervals, fits the IEEE terms and
 writes allan.json. The two commands alternate `REPEATS` times; the figures
-are the ratio of median wall times and of peak resident memory (ru_maxrss of
-the child process). Timings are noisy while other jobs share the CPU.
+are the ratios of median wall times, of median CPU times (user + system of
+the child, less sensitive to other load) and of peak resident memory
+(``/usr/bin/time -v``). Timings are noisy while other jobs share the CPU.
 """
 
 from __future__ import annotations
 
 import json
+import resource
 import statistics
 import subprocess
 import sys
@@ -45,11 +47,14 @@ def make_data() -> None:
     pd.DataFrame({"time": np.arange(N_SAMPLES) / FS_HZ, "rate": rate}).to_parquet(DATA)
 
 
-def run(cmd: list[str]) -> float:
-    """Wall time [s] of one child process."""
+def run(cmd: list[str]) -> tuple[float, float]:
+    """Wall time and CPU time (user + system) [s] of one child process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    return time.perf_counter() - start
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def peak_rss(cmd: list[str]) -> float:
@@ -70,10 +75,14 @@ def main() -> int:
     out = HERE / "_data" / "allan_bench.json"
     ours = [sys.executable, "-m", "gyrocomp", "--quiet", "allan", str(DATA), "--out", str(out)]
     theirs = [sys.executable, "-c", ALLANTOOLS_SCRIPT, str(DATA)]
-    t_ours, t_theirs = [], []
+    t_ours, t_theirs, cpu_ours, cpu_theirs = [], [], [], []
     for _ in range(REPEATS):
-        t_ours.append(run(ours))
-        t_theirs.append(run(theirs))
+        wall, cpu = run(ours)
+        t_ours.append(wall)
+        cpu_ours.append(cpu)
+        wall, cpu = run(theirs)
+        t_theirs.append(wall)
+        cpu_theirs.append(cpu)
     mem_ours, mem_theirs = peak_rss(ours), peak_rss(theirs)
     figures = {
         "n_samples": N_SAMPLES,
@@ -81,10 +90,12 @@ def main() -> int:
         "gyrocomp_s": statistics.median(t_ours),
         "allantools_s": statistics.median(t_theirs),
         "time_ratio": statistics.median(t_ours) / statistics.median(t_theirs),
+        "cpu_ratio": statistics.median(cpu_ours) / statistics.median(cpu_theirs),
         "gyrocomp_peak_mb": mem_ours,
         "allantools_peak_mb": mem_theirs,
         "memory_ratio": mem_ours / mem_theirs,
         "all_runs_s": {"gyrocomp": t_ours, "allantools": t_theirs},
+        "all_cpu_s": {"gyrocomp": cpu_ours, "allantools": cpu_theirs},
     }
     for key, value in figures.items():
         print(f"{key}: {value}")
