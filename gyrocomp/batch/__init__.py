@@ -95,7 +95,7 @@ def run_batch(
 
     Parameters
     ----------
-    command : {"allan", "compensate", "run"}
+    command : {"allan", "compensate", "run", "diagnose"}
         The stage (:data:`gyrocomp.batch.jobs.JOBS`).
     inputs : sequence of path-like or glob patterns
         Recordings; patterns are expanded (``**`` recurses).
@@ -106,7 +106,7 @@ def run_batch(
         omitted ones take the command's defaults.
     files : dict
         Files the command needs: ``model`` (compensate), ``config`` (run:
-        the run config; allan: the ``[allan]`` TOML).
+        the run config; allan, diagnose: the TOML of their table).
     workers : int or None
         Local worker processes (``None``: every core; 1 runs in this process).
     scheduler : str or dask.distributed.Client or None
@@ -127,7 +127,8 @@ def run_batch(
     if not paths:
         raise InputError(f"batch: no recording matches {', '.join(map(str, inputs)) or '(nothing given)'}")
     chosen = _options(job, options or {})
-    files = {key: _absolute(value) for key, value in (files or {}).items() if value is not None}
+    files = {**(files or {}), **{key: chosen.pop(key) for key in job.file_options}}
+    files = {key: _absolute(value) for key, value in files.items() if value is not None}
     settings = job.resolve(chosen, files)
     out.mkdir(parents=True, exist_ok=True)
     names = folder_names(paths)

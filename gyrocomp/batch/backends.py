@@ -91,7 +91,7 @@ def run_dask(fn: Callable[[dict], dict], tasks: Iterable[dict], *, scheduler) ->
     own = not isinstance(scheduler, Client)
     if own:
         try:
-            client = Client(scheduler, timeout="20s", set_as_default=False)
+            client = Client(scheduler, timeout="20s")
         except (OSError, TimeoutError) as err:
             raise InputError(f"--scheduler {scheduler}: cannot connect ({' '.join(str(err).split())})") from None
     else:

@@ -28,6 +28,9 @@ Files per output folder
     ``report.json``, ``report.md``, ``report.png`` and one folder per
     method (as ``gyrocomp run``). The report records stage times, so its
     bytes differ between runs; its scores do not.
+``diagnose``
+    ``report.json``, ``report.md``, ``gap.png`` (as ``gyrocomp diagnose
+    --markdown --plot``).
 
 Every folder also holds ``manifest.json`` (:mod:`gyrocomp.batch.manifest`).
 """
@@ -36,13 +39,18 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import threading
 import warnings
 from pathlib import Path
 from typing import Callable
 
 from gyrocomp.errors import GyrocompError, InputError, ThresholdError
 
-__all__ = ["Job", "JOBS", "get_job", "process_input", "paired_test_path"]
+__all__ = ["Job", "JOBS", "get_job", "process_input", "paired_path"]
+
+_PLOT_LOCK = threading.Lock()
+"""Matplotlib is not thread-safe (its mathtext parser is shared): a Dask worker
+runs several inputs as threads of one process, so plots are drawn one at a time."""
 
 _COLUMN_OPTIONS = {"time_col": "time", "rate_col": "rate", "temp_col": "temperature", "time_unit": "s", "rate_unit": "deg/s", "temp_unit": "degC"}
 """The column options every recording-reading command shares, with their defaults."""
@@ -65,12 +73,16 @@ class Job:
     execute : callable(input: Path, folder: Path, settings: dict, files: dict) -> (dict, str)
         Run the stage for one input into `folder`; return the key figures
         and the CI threshold message.
+    file_options : tuple of str
+        Options that name a file every input uses; they travel in `files`
+        (as absolute paths), and the settings hold their SHA-256.
     """
 
     name: str
     options: dict
     resolve: Callable[[dict, dict], dict]
     execute: Callable[[Path, Path, dict, dict], tuple[dict, str]]
+    file_options: tuple = ()
 
 
 def get_job(command: str) -> Job:
@@ -192,7 +204,8 @@ def _allan_execute(source: Path, folder: Path, settings: dict, files: dict) -> t
         raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(map(str, rec.data.columns))}")
     series = al.analyse(rec.data[column].to_numpy(), rec.fs_hz, taus=settings["allan"]["taus"], name=source.name, column=column, settings=config)
     io.write_json(folder / "allan.json", al.allan_artefact([series], inputs=[rec.input_record()], settings=settings["allan"]))
-    al.plot_allan([series], folder / "allan.png")
+    with _PLOT_LOCK:
+        al.plot_allan([series], folder / "allan.png")
     figures = {}
     for key in ("arw", "bias_instability", "rrw"):
         term = series.terms[key]
@@ -275,38 +288,44 @@ def _run_resolve(options: dict, files: dict) -> dict:
     }
 
 
-def paired_test_path(template: str | None, source: Path) -> Path | None:
-    """The held-out recording paired with a training input.
+def paired_path(template: str | None, source: Path, option: str = "--test") -> Path | None:
+    """The second recording paired with an input (``run --test``, ``diagnose --holdout``).
 
-    `template` may hold ``{stem}``, ``{name}`` and ``{dir}`` of the training
-    input: ``--test 'test/{name}'`` pairs ``train/unit07.parquet`` with
+    `template` may hold ``{stem}``, ``{name}`` and ``{dir}`` of the input:
+    ``--test 'test/{name}'`` pairs ``train/unit07.parquet`` with
     ``test/unit07.parquet``. Without placeholders every input shares one
-    test recording; ``None`` scores each unit on its training run.
+    recording; ``None`` pairs nothing.
     """
     if template is None:
         return None
     try:
         return Path(str(template).format(stem=source.stem, name=source.name, dir=source.parent))
     except (KeyError, IndexError, ValueError) as err:
-        raise InputError(f"batch run: --test {template!r}: bad placeholder ({err}); use {{stem}}, {{name}} or {{dir}}") from None
+        raise InputError(f"batch: {option} {template!r}: bad placeholder ({err}); use {{stem}}, {{name}} or {{dir}}") from None
+
+
+def _paired(template: str | None, source: Path, option: str) -> Path | None:
+    path = paired_path(template, source, option)
+    if path is not None and not path.is_file():
+        raise InputError(f"{source}: its {option} recording {path} does not exist")
+    return path
 
 
 def _run_execute(source: Path, folder: Path, settings: dict, files: dict) -> tuple[dict, str]:
     from gyrocomp.pipeline.run import run
 
-    test = paired_test_path(settings["test"], source)
-    if test is not None and not test.is_file():
-        raise InputError(f"{source}: its test recording {test} does not exist")
-    report = run(
-        files["config"],
-        source,
-        folder,
-        test_path=test,
-        seed=settings["seed"],
-        workers=1,
-        overrides=settings["overrides"],
-        columns=_column_spec(settings),
-    )
+    test = _paired(settings["test"], source, "--test")
+    with _PLOT_LOCK:  # the report's plot uses pyplot: a threaded Dask worker runs one unit at a time
+        report = run(
+            files["config"],
+            source,
+            folder,
+            test_path=test,
+            seed=settings["seed"],
+            workers=1,
+            overrides=settings["overrides"],
+            columns=_column_spec(settings),
+        )
     figures = {"held_out": bool(report["test"]["held_out"])}
     for row in report["rows"]:
         label = row["method"] if row["mode"] is None else f"{row['method']}_{row['mode']}"
@@ -314,6 +333,55 @@ def _run_execute(source: Path, folder: Path, settings: dict, files: dict) -> tup
         figures[f"{label}_bias_instability"] = row["bias_instability"]["value"]
         figures[f"{label}_drift_std_deg_h"] = row["residual_drift"]["std_deg_h"]
         figures[f"{label}_drift_p2p_deg_h"] = row["residual_drift"]["p2p_deg_h"]
+    return figures, ""
+
+
+# ---------------------------------------------------------------- diagnose
+
+def _diagnose_resolve(options: dict, files: dict) -> dict:
+    from gyrocomp.config import settings_dict
+    from gyrocomp.diagnose import get_config
+
+    return {
+        "diagnose": settings_dict(get_config(files.get("config") or "diagnose")),
+        "holdout": options["holdout"],
+        "sim": None if files.get("sim") is None else _file_identity(files["sim"], "--sim"),
+        "columns": _columns(options),
+        "resample": options["resample"],
+    }
+
+
+def _diagnose_execute(source: Path, folder: Path, settings: dict, files: dict) -> tuple[dict, str]:
+    from gyrocomp import io
+    from gyrocomp.diagnose import diagnose, get_config
+    from gyrocomp.diagnose.report import plot_gap, to_json, to_markdown
+
+    config = get_config(files.get("config") or "diagnose")
+    columns = _column_spec(settings)
+    holdout = _paired(settings["holdout"], source, "--holdout")
+    fit_rec = io.read_recording(source, columns, resample=settings["resample"], min_samples=64)
+    hold_rec = None if holdout is None else io.read_recording(holdout, columns, resample=settings["resample"], min_samples=64)
+    start = ()
+    if files.get("sim"):
+        from gyrocomp.sim.model import load_sim_config
+
+        start = tuple(load_sim_config(files["sim"]).gyro.active_effects())
+    body = diagnose(fit_rec, hold_rec, config, start_effects=start)
+    inputs = [fit_rec.input_record()] + ([hold_rec.input_record()] if hold_rec else [])
+    report = to_json(body, inputs=inputs, settings=settings["diagnose"])
+    io.write_json(folder / "report.json", report)
+    with io.atomic_path(folder / "report.md") as tmp:
+        Path(tmp).write_text(to_markdown(report), encoding="utf-8")
+    with _PLOT_LOCK:
+        plot_gap(report, folder / "gap.png")
+    gap = report["gap"]
+    figures = {
+        "selected_effects": " ".join(report["selected_effects"]),
+        "gap_baseline_fit": gap["baseline"]["fit"],
+        "gap_selected_fit": gap["selected"]["fit"],
+        "gap_baseline_holdout": gap["baseline"]["holdout"],
+        "gap_selected_holdout": gap["selected"]["holdout"],
+    }
     return figures, ""
 
 
@@ -326,5 +394,8 @@ JOBS: dict[str, Job] = {
     ),
     "compensate": Job("compensate", {"mode": "causal", "seed": None, **_COLUMN_OPTIONS, "resample": False}, _compensate_resolve, _compensate_execute),
     "run": Job("run", {"test": None, "seed": 0, "assignments": None, **_COLUMN_OPTIONS}, _run_resolve, _run_execute),
+    "diagnose": Job(
+        "diagnose", {"holdout": None, "sim": None, **_COLUMN_OPTIONS, "resample": False}, _diagnose_resolve, _diagnose_execute, ("sim",)
+    ),
 }
 """The batchable commands by name."""

@@ -1,4 +1,4 @@
-"""``gyrocomp batch``: run allan, compensate or run over many recordings, incrementally, locally or on Dask."""
+"""``gyrocomp batch``: run allan, compensate, run or diagnose over many recordings, incrementally, locally or on Dask."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ _BATCH_OWNS = {"out", "workers", "config", "plot", "recordings", "recording", "m
 @app.command(context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
 def batch(
     ctx: typer.Context,
-    command: Annotated[str, typer.Argument(help="allan, compensate or run.")],
+    command: Annotated[str, typer.Argument(help="allan, compensate, run or diagnose.")],
     args: Annotated[
         List[str],
         typer.Argument(
@@ -28,7 +28,7 @@ def batch(
     workers: Annotated[Optional[int], typer.Option("--workers", help="Local worker processes (default: every core; 1 runs in this process).")] = None,
     scheduler: Annotated[Optional[str], typer.Option("--scheduler", help="Address of a Dask distributed scheduler (tcp://host:8786) to run on instead; needs the dask extra.")] = None,
     model: Annotated[Optional[Path], typer.Option("--model", help="compensate: the model.json applied to every input.")] = None,
-    config: Annotated[Optional[str], typer.Option("--config", help="run: the run config (e.g. compare); allan: the TOML with an [allan] table.")] = None,
+    config: Annotated[Optional[str], typer.Option("--config", help="run: the run config (e.g. compare); allan / diagnose: the TOML with an [allan] / [diagnose] table.")] = None,
 ) -> None:
     """Run one command over many recordings, one output folder each, skipping those already up to date.
 
@@ -47,6 +47,7 @@ def batch(
       compensate  --mode --seed, column options, --resample (and --model here)
       run         --test TEMPLATE --seed --set, column options (and --config here); TEMPLATE may
                   hold {stem}, {name}, {dir} of each training input, e.g. --test 'test/{name}'
+      diagnose    --holdout TEMPLATE (as --test) --sim, column options, --resample (and --config)
     Column options: --time-col --rate-col --temp-col --time-unit --rate-unit --temp-unit.
     """
     console = console_for(ctx)
@@ -118,11 +119,11 @@ def _table(result, n_figures: int = 4):
 
     table = Table(title=f"gyrocomp batch {result.command} (every figure: summary.csv)")
     figures = [c for c in result.columns if c not in ("input", "output", "status", "error", "threshold", "sha256")][:n_figures]
-    table.add_column("input", overflow="fold")
-    table.add_column("status")
+    table.add_column("input", overflow="fold", min_width=12)
+    table.add_column("status", no_wrap=True)
     for head in figures:
-        table.add_column(head.replace("_", " "), justify="right")
-    table.add_column("error / threshold", max_width=60, no_wrap=True, overflow="ellipsis")
+        table.add_column(head.replace("_", " "), justify="right", no_wrap=True)
+    table.add_column("error / threshold", max_width=36, overflow="fold")
     for row in result.rows:
         table.add_row(row["input"], row["status"], *[_cell(row[c]) for c in figures], row["error"] or row["threshold"])
     return table
