@@ -185,19 +185,18 @@ def read_recording(
         jitter beyond the tolerance; fewer than `min_samples` samples;
         temperature outside a plausible range for the declared unit.
     """
-    name, raw = _read_bytes(path)
-    sha = hashlib.sha256(raw).hexdigest()
+    name, source, sha = _open_source(path)
     kind = _kind(name)
     metadata = {}
     if kind == "parquet":
-        frame, metadata = _parse_parquet(name, raw)
+        frame, metadata = _parse_parquet(name, source)
         where = "row"
         first = 1
     else:
-        frame = _parse_csv(name, raw)
+        frame = _parse_csv(name, source)
         where = "line"
         first = 2  # line 1 is the header
-    del raw
+    del source
     return recording_from_frame(
         frame,
         name=name,
@@ -481,6 +480,28 @@ def _umask() -> int:
     return mask
 
 
+def _open_source(path: str | os.PathLike) -> tuple[str, str | bytes, str]:
+    """Name, what to parse (a path, or the bytes of stdin) and SHA-256 of a recording.
+
+    A file is hashed by streaming and parsed from its path (Parquet memory-mapped),
+    so its bytes are never held in memory twice.
+    """
+    if str(path) == "-":
+        raw = sys.stdin.buffer.read()
+        return "-", raw, hashlib.sha256(raw).hexdigest()
+    name = os.fspath(path)
+    try:
+        with open(name, "rb") as fh:
+            sha = hashlib.file_digest(fh, "sha256").hexdigest()
+    except FileNotFoundError:
+        raise InputError(f"{name}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{name}: is a directory, expected a file") from None
+    except PermissionError:
+        raise InputError(f"{name}: permission denied") from None
+    return name, name, sha
+
+
 def _read_bytes(path: str | os.PathLike) -> tuple[str, bytes]:
     if str(path) == "-":
         return "-", sys.stdin.buffer.read()
@@ -507,11 +528,11 @@ def _kind(name: str) -> str:
     raise InputError(f"{name}: unknown extension {suffix!r}; use .csv or .parquet")
 
 
-def _parse_csv(name: str, raw: bytes) -> pd.DataFrame:
-    if not raw.strip():
-        raise InputError(f"{name}: file is empty")
+def _parse_csv(name: str, source: str | bytes) -> pd.DataFrame:
+    if isinstance(source, bytes):
+        source = _stdio.BytesIO(source)
     try:
-        return pd.read_csv(_stdio.BytesIO(raw), comment="#", skipinitialspace=True)
+        return pd.read_csv(source, comment="#", skipinitialspace=True)
     except pd.errors.EmptyDataError:
         raise InputError(f"{name}: file is empty") from None
     except pd.errors.ParserError as err:
@@ -520,14 +541,18 @@ def _parse_csv(name: str, raw: bytes) -> pd.DataFrame:
         raise InputError(f"{name}: not a text CSV file") from None
 
 
-def _parse_parquet(name: str, raw: bytes) -> tuple[pd.DataFrame, dict]:
+def _parse_parquet(name: str, source: str | bytes) -> tuple[pd.DataFrame, dict]:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    if not raw:
+    empty = len(source) == 0 if isinstance(source, bytes) else os.path.getsize(source) == 0
+    if empty:
         raise InputError(f"{name}: file is empty")
     try:
-        table = pq.read_table(pa.BufferReader(raw))
+        if isinstance(source, bytes):
+            table = pq.read_table(pa.BufferReader(source))
+        else:
+            table = pq.read_table(source, memory_map=True)
     except (pa.ArrowInvalid, OSError) as err:
         raise InputError(f"{name}: not a readable Parquet file ({err})") from None
     meta = table.schema.metadata or {}
