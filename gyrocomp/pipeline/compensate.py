@@ -60,8 +60,6 @@ class DriftModel:
     kind: str
     parallel: bool
     rate: RateSettings
-    input_offset: np.ndarray
-    input_scale: np.ndarray
     learners: dict
     clip_inputs: bool
 
@@ -88,10 +86,9 @@ class DriftModel:
         if self.clip_inputs:
             (t_lo, t_hi), (r_lo, r_hi) = self.temperature_range_c, self.rate_range_c_per_s
             X = np.clip(X, [t_lo, r_lo], [t_hi, r_hi])
-        Xn = (X - self.input_offset) / self.input_scale
         return {
-            segment: learner.predict(Xn) * y_scale + y_offset
-            for segment, (learner, y_offset, y_scale) in self.learners.items()
+            segment: learner.predict((X - x_offset) / x_scale) * y_scale + y_offset
+            for segment, (learner, x_offset, x_scale, y_offset, y_scale) in self.learners.items()
         }
 
 
@@ -112,24 +109,27 @@ def load_model(obj: dict, name: str = "model.json") -> DriftModel:
     try:
         rate_table = {k: obj["rate_estimator"][k] for k in ("method", "window_s", "polyorder")}
         rate = bind(RateSettings, rate_table, f"{name} rate_estimator")
-        norm = obj["normalisation"]
-        offset = np.asarray(norm["input_offset"], dtype=float)
-        scale = np.asarray(norm["input_scale"], dtype=float)
-        if offset.shape != (len(INPUTS),) or scale.shape != (len(INPUTS),) or not np.all(scale > 0):
-            raise InputError(f"{name}: normalisation needs {len(INPUTS)} offsets and positive scales")
         learners = {}
         for segment, entry in obj["segments"].items():
+            offset = np.asarray(entry["input_offset"], dtype=float)
+            scale = np.asarray(entry["input_scale"], dtype=float)
+            if offset.shape != (len(INPUTS),) or scale.shape != (len(INPUTS),) or not np.all(scale > 0):
+                raise InputError(f"{name}: segment {segment} needs {len(INPUTS)} input offsets and positive scales")
+            if not isinstance(entry["learner"], dict) or entry["learner"].get("fitted") is None:
+                raise InputError(f"{name}: segment {segment}: the learner holds no fitted parameters")
             learner = models.from_dict(entry["learner"])
-            learners[segment] = (learner, float(entry["output_offset"]), float(entry["output_scale"]))
+            learners[segment] = (learner, offset, scale, float(entry["output_offset"]), float(entry["output_scale"]))
         for key in ("temperature_c", "temperature_rate_c_per_s"):
             float(obj["training"][key]["min"]), float(obj["training"][key]["max"])
         kind, parallel = str(obj["kind"]), bool(obj["parallel"])
-        clip = bool(norm["clip_inputs"])
-    except (KeyError, TypeError) as err:
+        clip = bool(obj["clip_inputs"])
+    except InputError:
+        raise
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as err:
         raise InputError(f"{name}: corrupted model ({type(err).__name__}: {err})") from None
     if not learners:
         raise InputError(f"{name}: no fitted segment")
-    return DriftModel(obj, name, kind, parallel, rate, offset, scale, learners, clip)
+    return DriftModel(obj, name, kind, parallel, rate, learners, clip)
 
 
 def compensate(

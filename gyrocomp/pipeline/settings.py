@@ -114,6 +114,11 @@ class LearnerSpec:
             params["seed"] = seed
         return cls(**params)
 
+    @property
+    def normalise_inputs(self) -> bool:
+        """Map the inputs' training range to [-1, 1]; not for the polynomial, whose ``reference_temperature`` is in degC."""
+        return self.learner != "polynomial"
+
     def to_dict(self) -> dict:
         return {"learner": self.learner, **self.params}
 
@@ -132,13 +137,20 @@ class ModelSettings:
         asked to extrapolate, its prediction beyond the range is that at the
         edge. False lets the model's own form extrapolate, right for a
         polynomial with a physical temperature-rate term.
+    max_samples : int
+        Train on at most this many samples: longer runs are reduced to the
+        means of consecutive blocks of ``ceil(n / max_samples)`` samples
+        (inputs and targets alike; the drift varies over minutes, the
+        blocks last seconds). 0 trains on every sample.
     """
 
     segments: dict
     clip_inputs: bool = True
+    max_samples: int = 5000
 
     def to_dict(self) -> dict:
-        return {"clip_inputs": self.clip_inputs, **{name: spec.to_dict() for name, spec in self.segments.items()}}
+        head = {"clip_inputs": self.clip_inputs, "max_samples": self.max_samples}
+        return {**head, **{name: spec.to_dict() for name, spec in self.segments.items()}}
 
 
 def pipeline_settings(config: dict, source: str) -> PipelineSettings:
@@ -166,11 +178,14 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
     clip = table.pop("clip_inputs", True)
     if not isinstance(clip, bool):
         raise InputError(f"{source} [model]: clip_inputs = {clip!r} should be true or false")
+    max_samples = table.pop("max_samples", 5000)
+    if isinstance(max_samples, bool) or not isinstance(max_samples, int) or max_samples < 0:
+        raise InputError(f"{source} [model]: max_samples = {max_samples!r} should be an integer >= 0")
     allowed = SEGMENTS if parallel else ("drift",)
     unknown = sorted(set(table) - set(allowed))
     if unknown:
         raise InputError(
-            f"{source} [model]: unknown segment or key {', '.join(unknown)}; known: clip_inputs, {', '.join(allowed)}"
+            f"{source} [model]: unknown segment or key {', '.join(unknown)}; known: clip_inputs, max_samples, {', '.join(allowed)}"
         )
     segments = {}
     for segment in allowed:
@@ -186,7 +201,7 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
         if bad:
             raise InputError(f"{where}: unknown setting {', '.join(bad)} for {name}; known: {', '.join(known)}")
         segments[segment] = LearnerSpec(learner=name, params=entry)
-    return ModelSettings(segments=segments, clip_inputs=clip)
+    return ModelSettings(segments=segments, clip_inputs=clip, max_samples=max_samples)
 
 
 def learner_class(name: str) -> type:

@@ -22,8 +22,10 @@ Inputs and normalisation: column 0 is the measured temperature [degC],
 column 1 its rate [degC/s] from the centred estimator of
 :mod:`gyrocomp.pipeline.rate`; "all the sequences are normalized" (Cao et
 al. 2021, section IV-B): each input is mapped linearly so that its training
-range becomes [-1, 1], and each target is centred on its mean and divided
-by its standard deviation. Both maps are stored in ``model.json``.
+range becomes [-1, 1] (except for the polynomial, whose reference
+temperature is in degC), and each target is centred on its mean and
+divided by its standard deviation. Both maps are stored per segment in
+``model.json``.
 """
 
 from __future__ import annotations
@@ -209,18 +211,23 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
     model_table = model_settings(config, source, parallel=pipeline.parallel)
     X = rate_estimator.model_inputs(temperature, fs_hz, rate_cfg)
     lo, hi = X.min(axis=0), X.max(axis=0)
-    offset = (hi + lo) / 2
-    scale = np.where(hi > lo, (hi - lo) / 2, 1.0)
-    Xn = (X - offset) / scale
     fitted = {}
     for segment, y in targets.items():
         spec = model_table.segments[segment]
+        if spec.normalise_inputs:
+            offset, scale = (hi + lo) / 2, np.where(hi > lo, (hi - lo) / 2, 1.0)
+        else:
+            offset, scale = np.zeros(X.shape[1]), np.ones(X.shape[1])
+        Xn = (X - offset) / scale
         y_offset = float(np.mean(y))
         y_scale = float(np.std(y)) or 1.0
-        learner = spec.build(seed).fit(Xn, (y - y_offset) / y_scale)
+        Xb, yb = _block_means(Xn, (y - y_offset) / y_scale, model_table.max_samples)
+        learner = spec.build(seed).fit(Xb, yb)
         prediction = learner.predict(Xn) * y_scale + y_offset
         fitted[segment] = {
             **extra["segments"][segment],
+            "input_offset": offset.tolist(),
+            "input_scale": scale.tolist(),
             "output_offset": y_offset,
             "output_scale": y_scale,
             "train_rmse_dps": float(np.sqrt(np.mean((prediction - y) ** 2))),
@@ -234,16 +241,12 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
         "fs_hz": float(fs_hz),
         "inputs": list(INPUTS),
         "rate_estimator": rate_estimator.describe(rate_cfg, fs_hz),
-        "normalisation": {
-            "input_offset": offset.tolist(),
-            "input_scale": scale.tolist(),
-            "clip_inputs": model_table.clip_inputs,
-            "note": (
-                "x_normalised = (x - input_offset) / input_scale, x first held inside the training range "
-                "when clip_inputs; "
-                "y = learner(x_normalised) * output_scale + output_offset"
-            ),
-        },
+        "clip_inputs": model_table.clip_inputs,
+        "formula": (
+            "per segment: y = learner((x - input_offset) / input_scale) * output_scale + output_offset, "
+            "x = [temperature, temperature rate] held inside the training ranges when clip_inputs; "
+            "drift_model = sum over segments"
+        ),
         "segments": fitted,
         "training": {
             "temperature_c": {"min": float(lo[0]), "max": float(hi[0])},
@@ -255,6 +258,19 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
     if extra.get("training_classes") is not None:
         body["training"]["classes"] = extra["training_classes"]
     return {**header, **body}
+
+
+def _block_means(X: np.ndarray, y: np.ndarray, max_samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """Means of consecutive blocks of ceil(n / max_samples) samples (a partial last block is kept)."""
+    n = len(y)
+    if max_samples == 0 or n <= max_samples:
+        return X, y
+    k = -(-n // max_samples)
+    starts = np.arange(0, n, k)
+    counts = np.diff(np.append(starts, n))
+    Xb = np.add.reduceat(X, starts, axis=0) / counts[:, None]
+    yb = np.add.reduceat(y, starts) / counts
+    return Xb, yb
 
 
 def _component_names(frame, header: dict) -> list[str]:
