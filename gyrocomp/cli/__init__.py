@@ -6,7 +6,7 @@ import importlib
 
 from gyrocomp.cli._app import app
 
-_COMMANDS = ("simulate", "allan", "decompose", "train", "compensate", "run", "batch", "diagnose")
+_COMMANDS = ("simulate", "allan", "decompose", "train", "compensate", "run", "batch", "diagnose", "classify")
 """Command modules of this package; each registers its commands on ``app``."""
 
 for _name in _COMMANDS:
