@@ -24,6 +24,12 @@ References
    (stopping rule with thresholds theta1, theta2, alpha).
 .. [3] M. A. Colominas, G. Schlotthauer, M. E. Torres, "Improved complete
    ensemble EMD", Biomed. Signal Process. Control 14, 19-29 (2014).
+.. [4] N. E. Huang, M.-L. C. Wu, S. R. Long et al., "A confidence limit for
+   the empirical mode decomposition and Hilbert spectral analysis",
+   Proc. R. Soc. Lond. A 459, 2317-2345 (2003) (S-number).
+.. [5] Z. Wu, N. E. Huang, "Ensemble empirical mode decomposition: a
+   noise-assisted data analysis method", Adv. Adapt. Data Anal. 1, 1-41
+   (2009) (fixed number of siftings).
 """
 
 from __future__ import annotations
@@ -38,6 +44,9 @@ __all__ = ["Sifting", "emd", "sift", "local_mean", "count_extrema"]
 _NBSYM = 2
 """Extrema mirrored at each end (``nbsym`` of Rilling's ``emd.m``)."""
 
+STOPS = ("rilling", "sd", "s_number", "fixed")
+"""Sifting stopping rules (see :class:`Sifting`)."""
+
 _TINY = 1e-10
 """Rilling's ``emd.m`` ends the decomposition when a residue's peak falls below this fraction of the input's."""
 
@@ -48,17 +57,24 @@ class Sifting:
 
     Parameters
     ----------
-    stop : {"rilling", "sd"}
+    stop : {"rilling", "sd", "s_number", "fixed"}
         ``"rilling"``: stop when ``|m(t)|/a(t) < theta1`` on all but a
         fraction `alpha` of the samples and ``< theta2`` everywhere, with m
         the mean and a the half-difference of the envelopes, and the numbers
         of extrema and zero crossings differ by at most one ([2]_).
         ``"sd"``: stop when ``sum(m**2) / sum(h**2) <= sd_threshold`` ([1]_,
         the energy-weighted form of eq. (5.5)).
+        ``"s_number"``: stop when `s_number` consecutive sifting results
+        have numbers of extrema and zero crossings that differ by at most
+        one and stay the same ([4]_, section 3).
+        ``"fixed"``: exactly `max_sift` siftings ([5]_, section 3: about 10
+        for ensemble EMD).
     thresholds : tuple of float
         ``(theta1, theta2, alpha)`` of the Rilling rule.
     sd_threshold : float
         Threshold of the SD rule.
+    s_number : int
+        S of the S-number rule (Huang et al. 2003 suggest 4 to 8).
     max_sift : int
         Most sifting iterations per IMF (``MAXITERATIONS``).
     """
@@ -66,11 +82,14 @@ class Sifting:
     stop: str = "rilling"
     thresholds: tuple = (0.05, 0.5, 0.05)
     sd_threshold: float = 0.2
+    s_number: int = 4
     max_sift: int = 2000
 
     def __post_init__(self):
-        if self.stop not in ("rilling", "sd"):
-            raise ValueError(f"stop = {self.stop!r}; choose rilling or sd")
+        if self.stop not in STOPS:
+            raise ValueError(f"stop = {self.stop!r}; choose one of {', '.join(STOPS)}")
+        if self.s_number < 1:
+            raise ValueError(f"s_number = {self.s_number}; must be at least 1")
         if len(self.thresholds) != 3 or min(self.thresholds) < 0:
             raise ValueError(f"thresholds = {self.thresholds!r}; expected three non-negative numbers (theta1, theta2, alpha)")
         if self.max_sift < 1:
@@ -130,18 +149,40 @@ def sift(rows: np.ndarray, sifting: Sifting = Sifting()) -> np.ndarray:
         The first IMF of each row; zero for a row with fewer than three
         extrema (its local mean is the row itself).
     """
-    return _sift(rows, sifting, _mean_envelope, _energy_stop(sifting))
+    rows = np.ascontiguousarray(rows, dtype=float)
+    compiled = _compiled()
+    if compiled is None:
+        return _sift(rows, sifting, _mean_envelope, _energy_stop(sifting))
+    theta1, theta2, alpha = (float(v) for v in sifting.thresholds)
+    return compiled.sift_rows(
+        rows, compiled.STOPS[sifting.stop], theta1, theta2, alpha,
+        float(sifting.sd_threshold), int(sifting.s_number), int(sifting.max_sift),
+    )
 
 
 def local_mean(rows: np.ndarray, sifting: Sifting = Sifting()) -> np.ndarray:
     """Local mean ``M(y) = y - IMF1(y)`` of every row ([3]_ section 3)."""
-    return rows - _sift(rows, sifting, _mean_envelope, _energy_stop(sifting))
+    return rows - sift(rows, sifting)
 
 
 def count_extrema(rows: np.ndarray) -> np.ndarray:
     """Number of local extrema (maxima + minima) per row, plateaus counted once."""
     imax, imin = _extrema(np.atleast_2d(rows))
     return imax.sum(axis=1) + imin.sum(axis=1)
+
+
+def _compiled():
+    """The numba kernel module, or None without numba (the numpy path then runs).
+
+    The kernel fuses the numpy path's array passes and gives the same
+    result (tests/decompose compare them); numba is imported here, on first
+    use, never at ``gyrocomp --help``.
+    """
+    try:
+        from gyrocomp.decompose import _compiled as kernel
+    except ImportError:
+        return None
+    return kernel
 
 
 def _sift(rows, sifting, mean_fn, energy_stop=None, **mean_kw):
@@ -157,10 +198,13 @@ def _sift(rows, sifting, mean_fn, energy_stop=None, **mean_kw):
     h = np.array(rows, dtype=float, copy=True)
     has_imf = np.zeros(h.shape[0], bool)
     active = np.arange(h.shape[0])
+    streak = np.zeros((h.shape[0], 3), np.int64)  # S-number: run length, extrema, zero crossings
     count = 0
     while active.size:
         sub = h[active]
         mean, ok, passed = mean_fn(sub, sifting, **mean_kw)
+        if sifting.stop == "s_number":
+            passed = _s_number(sub, streak, active, count, sifting.s_number)
         if count == 0:
             has_imf[active[ok]] = True
         go = ok & ~passed
@@ -177,6 +221,18 @@ def _sift(rows, sifting, mean_fn, energy_stop=None, **mean_kw):
         active = active[keep]
     h[~has_imf] = 0.0
     return h
+
+
+def _s_number(rows, streak, active, count, s_number):
+    """Update the S-number runs of the active rows ([4]_); True where a run reached S."""
+    n_ext = count_extrema(rows)
+    n_zero = _count_zero_crossings(rows)
+    run, last_ext, last_zero = streak[active].T
+    good = (np.abs(n_zero - n_ext) <= 1) & (count > 0)
+    same = (run > 0) & (n_ext == last_ext) & (n_zero == last_zero)
+    run = np.where(good, np.where(same, run + 1, 1), 0)
+    streak[active] = np.column_stack((run, n_ext, n_zero))
+    return run >= s_number
 
 
 def _energy_stop(sifting):
@@ -444,18 +500,33 @@ def _splines(knots, n):
     s0, s1 = s[:-1], s[1:]
     c2 = (3.0 * slope - 2.0 * s0 - s1) / h
     c3 = (s0 + s1 - 2.0 * slope) / (h * h)
-    bound = np.clip(t_int, 0, n)
-    bound[start] = 0
-    bound[end] = n
-    counts = np.diff(bound)
-    counts[end[:-1]] = 0
-    grid = np.tile(np.arange(n, dtype=float), sizes.size)
-    u = grid - np.repeat(t[:-1], counts)
-    out = np.repeat(c3, counts)
+    g = _piece_index(t_int, start, end, n)
+    u = np.tile(np.arange(n, dtype=float), sizes.size)
+    u -= np.take(t, g)
+    out = np.take(c3, g)
     out *= u
-    out += np.repeat(c2, counts)
+    out += np.take(c2, g)
     out *= u
-    out += np.repeat(s0, counts)
+    out += np.take(s0, g)
     out *= u
-    out += np.repeat(z[:-1], counts)
+    out += np.take(z, g)
     return out.reshape(sizes.size, n)
+
+
+def _piece_index(t_int, start, end, n):
+    """Index of the spline piece (its left knot, in the stacked arrays) of every sample.
+
+    Sample j of set s lies in the piece of the last knot of s at or before j;
+    the first knot of a set counts as at 0 and the last as beyond n - 1, so
+    the end pieces extrapolate. One ``bincount`` of the knots' flat
+    positions and one ``cumsum`` give all sets' indices at once: every knot
+    of earlier sets lies at or before a set's first sample.
+    """
+    sets = np.repeat(np.arange(start.size), end - start + 1)
+    pos = np.clip(t_int, 0, n)
+    pos[start] = 0
+    pos[end] = n
+    pos += sets * n
+    g = np.cumsum(np.bincount(pos, minlength=start.size * n + 1)[:-1])
+    g -= 1
+    return g
