@@ -62,6 +62,7 @@ class DriftModel:
     rate: RateSettings
     learners: dict
     clip_inputs: bool
+    clip_output: bool
 
     @property
     def temperature_range_c(self) -> tuple[float, float]:
@@ -80,16 +81,19 @@ class DriftModel:
     def predict(self, X: np.ndarray) -> dict:
         """Predicted drift of each modelled segment [deg/s] for inputs `X` (n_samples, 2).
 
-        With ``clip_inputs`` each input is first held inside its training range.
+        With ``clip_inputs`` each input is first held inside its training
+        range; with ``clip_output`` each prediction inside the range of its
+        segment's training target.
         """
         X = np.asarray(X, dtype=float)
         if self.clip_inputs:
             (t_lo, t_hi), (r_lo, r_hi) = self.temperature_range_c, self.rate_range_c_per_s
             X = np.clip(X, [t_lo, r_lo], [t_hi, r_hi])
-        return {
-            segment: learner.predict((X - x_offset) / x_scale) * y_scale + y_offset
-            for segment, (learner, x_offset, x_scale, y_offset, y_scale) in self.learners.items()
-        }
+        out = {}
+        for segment, (learner, x_offset, x_scale, y_offset, y_scale, y_range) in self.learners.items():
+            y = learner.predict((X - x_offset) / x_scale) * y_scale + y_offset
+            out[segment] = np.clip(y, *y_range) if self.clip_output else y
+        return out
 
 
 def load_model(obj: dict, name: str = "model.json") -> DriftModel:
@@ -118,18 +122,19 @@ def load_model(obj: dict, name: str = "model.json") -> DriftModel:
             if not isinstance(entry["learner"], dict) or entry["learner"].get("fitted") is None:
                 raise InputError(f"{name}: segment {segment}: the learner holds no fitted parameters")
             learner = models.from_dict(entry["learner"])
-            learners[segment] = (learner, offset, scale, float(entry["output_offset"]), float(entry["output_scale"]))
+            y_range = (float(entry["output_min"]), float(entry["output_max"]))
+            learners[segment] = (learner, offset, scale, float(entry["output_offset"]), float(entry["output_scale"]), y_range)
         for key in ("temperature_c", "temperature_rate_c_per_s"):
             float(obj["training"][key]["min"]), float(obj["training"][key]["max"])
         kind, parallel = str(obj["kind"]), bool(obj["parallel"])
-        clip = bool(obj["clip_inputs"])
+        clips = bool(obj["clip_inputs"]), bool(obj["clip_output"])
     except InputError:
         raise
     except (KeyError, TypeError, ValueError, IndexError, AttributeError) as err:
         raise InputError(f"{name}: corrupted model ({type(err).__name__}: {err})") from None
     if not learners:
         raise InputError(f"{name}: no fitted segment")
-    return DriftModel(obj, name, kind, parallel, rate, learners, clip)
+    return DriftModel(obj, name, kind, parallel, rate, learners, *clips)
 
 
 def compensate(
@@ -182,7 +187,7 @@ def compensate(
     if mode == "full" and model.parallel:
         if seed is None:
             seed = model.obj.get("settings", {}).get("decompose_seed")
-        parts, classes = _parallel_segments(rate, recording.fs_hz, model, seed, workers, callback)
+        parts, classes = _parallel_segments(rate, model, seed, workers, callback)
         summary["decompose_seed"] = seed
         compensated = sum(parts.values()) - drift_model
         summary["classes"] = classes
@@ -200,7 +205,7 @@ def compensate(
     return frame, summary
 
 
-def _parallel_segments(rate, fs_hz, model: DriftModel, seed, workers, callback):
+def _parallel_segments(rate, model: DriftModel, seed, workers, callback):
     from gyrocomp.classify import ClassifySettings, classify
     from gyrocomp.decompose import DecomposeSettings, decompose
     from gyrocomp.denoise import DenoiseSettings
@@ -213,7 +218,7 @@ def _parallel_segments(rate, fs_hz, model: DriftModel, seed, workers, callback):
     result = decompose(rate, decompose_settings, seed=seed, workers=workers, callback=callback)
     classes = classify(result.components, result.names, classify_settings)
     labels = [entry["class"] for entry in classes]
-    return segments(np.asarray(result.components), labels, denoise_settings, fs_hz), classes
+    return segments(np.asarray(result.components), labels, denoise_settings), classes
 
 
 def _ranges(name: str, X: np.ndarray, model: DriftModel) -> tuple[dict, list[str]]:

@@ -51,7 +51,8 @@ def findings(report: dict) -> list[str]:
                 worse.append(f"residual drift {_f(drift)} vs {_f(base['residual_drift']['std_deg_h'])} deg/h")
             if row["residual_drift"]["p2p_deg_h"] > base["residual_drift"]["p2p_deg_h"]:
                 worse.append(f"drift peak-to-peak {_f(row['residual_drift']['p2p_deg_h'])} vs {_f(base['residual_drift']['p2p_deg_h'])} deg/h")
-            if kept is not None and base.get("signal") and kept["rms_error_dps"] > 1.5 * base["signal"]["rms_error_dps"] + 1e-12:
+            tolerance = 1.5 * base["signal"]["rms_error_dps"] + 0.01 * report["signal"]["rms_dps"] if base.get("signal") else None
+            if kept is not None and tolerance is not None and kept["rms_error_dps"] > tolerance:
                 worse.append(f"signal RMS error {_f(kept['rms_error_dps'])} vs {_f(base['signal']['rms_error_dps'])} deg/s")
             if worse:
                 out.append(f"{label} does WORSE than the {BASELINE} baseline: {'; '.join(worse)}.")
@@ -179,7 +180,7 @@ def _f(value) -> str:
 
 
 def _pct(share: float) -> str:
-    return f"{100 * share:.0f}%"
+    return f"{100 * share:.0f}%".replace("-0%", "0%")
 
 
 def _ratio(before: float, after: float) -> str:

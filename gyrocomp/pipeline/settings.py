@@ -137,6 +137,12 @@ class ModelSettings:
         asked to extrapolate, its prediction beyond the range is that at the
         edge. False lets the model's own form extrapolate, right for a
         polynomial with a physical temperature-rate term.
+    clip_output : bool
+        Hold each segment's predicted drift inside the range of that
+        segment's training target. The box of input ranges does not stop a
+        learner from meeting a combination it never saw (a heating ramp at
+        -35 degC when training only cooled there); with few rules firing on
+        few samples, ANFIS consequents then predict drifts of tens of deg/s.
     max_samples : int
         Train on at most this many samples: longer runs are reduced to the
         means of consecutive blocks of ``ceil(n / max_samples)`` samples
@@ -146,10 +152,11 @@ class ModelSettings:
 
     segments: dict
     clip_inputs: bool = True
+    clip_output: bool = True
     max_samples: int = 5000
 
     def to_dict(self) -> dict:
-        head = {"clip_inputs": self.clip_inputs, "max_samples": self.max_samples}
+        head = {"clip_inputs": self.clip_inputs, "clip_output": self.clip_output, "max_samples": self.max_samples}
         return {**head, **{name: spec.to_dict() for name, spec in self.segments.items()}}
 
 
@@ -175,9 +182,10 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
     table = dict(config.get("model") or {})
     if not isinstance(table.get("drift"), dict):
         raise InputError(f"{source}: needs a [model.drift] table naming its `learner`")
-    clip = table.pop("clip_inputs", True)
-    if not isinstance(clip, bool):
-        raise InputError(f"{source} [model]: clip_inputs = {clip!r} should be true or false")
+    clips = {key: table.pop(key, True) for key in ("clip_inputs", "clip_output")}
+    for key, value in clips.items():
+        if not isinstance(value, bool):
+            raise InputError(f"{source} [model]: {key} = {value!r} should be true or false")
     max_samples = table.pop("max_samples", 5000)
     if isinstance(max_samples, bool) or not isinstance(max_samples, int) or max_samples < 0:
         raise InputError(f"{source} [model]: max_samples = {max_samples!r} should be an integer >= 0")
@@ -185,7 +193,7 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
     unknown = sorted(set(table) - set(allowed))
     if unknown:
         raise InputError(
-            f"{source} [model]: unknown segment or key {', '.join(unknown)}; known: clip_inputs, max_samples, {', '.join(allowed)}"
+            f"{source} [model]: unknown segment or key {', '.join(unknown)}; known: clip_inputs, clip_output, max_samples, {', '.join(allowed)}"
         )
     segments = {}
     for segment in allowed:
@@ -201,7 +209,7 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
         if bad:
             raise InputError(f"{where}: unknown setting {', '.join(bad)} for {name}; known: {', '.join(known)}")
         segments[segment] = LearnerSpec(learner=name, params=entry)
-    return ModelSettings(segments=segments, clip_inputs=clip, max_samples=max_samples)
+    return ModelSettings(segments=segments, max_samples=max_samples, **clips)
 
 
 def learner_class(name: str) -> type:

@@ -134,7 +134,7 @@ def train_parallel(
     fs_hz = _fs_of(components["time"].to_numpy(dtype=float))
     denoise = bind(DenoiseSettings, config.get("denoise"), f"{source} [denoise]")
     stack = components[list(names)].to_numpy(dtype=float).T
-    parts = segments(stack, labels, denoise, fs_hz)
+    parts = segments(stack, labels, denoise)
     if not any(label == "drift" for label in labels):
         raise InputError(
             "classes: no component is classed drift; the drift segment (trend included) is what the model learns"
@@ -168,8 +168,8 @@ def train_parallel(
     )
 
 
-def segments(stack: np.ndarray, labels, denoise_settings, fs_hz: float) -> dict:
-    """Sum the components of each class and denoise each sum as ``[denoise]`` says.
+def segments(stack: np.ndarray, labels, denoise_settings) -> dict:
+    """Denoise each component as ``[denoise]`` says for its class, then sum each class.
 
     Parameters
     ----------
@@ -177,22 +177,22 @@ def segments(stack: np.ndarray, labels, denoise_settings, fs_hz: float) -> dict:
     labels : sequence of {"noise", "mixed", "drift"}
         One class per component.
     denoise_settings : gyrocomp.denoise.DenoiseSettings
-    fs_hz : float
 
     Returns
     -------
     dict of str to ndarray
-        ``noise``, ``mixed``, ``drift``: the denoised segment sums [deg/s]
-        (zeros for a class without components).
+        ``noise``, ``mixed``, ``drift``: the sums of the denoised components
+        of each class [deg/s] (zeros for a class without components or one
+        that is dropped).
     """
     from gyrocomp import denoise
 
     labels = list(labels)
+    processed = denoise.apply(stack, labels, denoise_settings)
     out = {}
     for cls in ("noise", "mixed", "drift"):
         rows = [i for i, label in enumerate(labels) if label == cls]
-        raw = stack[rows].sum(axis=0) if rows else np.zeros(stack.shape[1])
-        out[cls] = denoise.apply(raw, cls, denoise_settings, fs_hz) if rows else raw
+        out[cls] = processed[rows].sum(axis=0) if rows else np.zeros(stack.shape[1])
     return out
 
 
@@ -230,6 +230,8 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
             "input_scale": scale.tolist(),
             "output_offset": y_offset,
             "output_scale": y_scale,
+            "output_min": float(np.min(yb) * y_scale + y_offset),
+            "output_max": float(np.max(yb) * y_scale + y_offset),
             "train_rmse_dps": float(np.sqrt(np.mean((prediction - y) ** 2))),
             "learner": learner.to_dict(),
         }
@@ -242,10 +244,11 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
         "inputs": list(INPUTS),
         "rate_estimator": rate_estimator.describe(rate_cfg, fs_hz),
         "clip_inputs": model_table.clip_inputs,
+        "clip_output": model_table.clip_output,
         "formula": (
             "per segment: y = learner((x - input_offset) / input_scale) * output_scale + output_offset, "
-            "x = [temperature, temperature rate] held inside the training ranges when clip_inputs; "
-            "drift_model = sum over segments"
+            "x = [temperature, temperature rate] held inside the training ranges when clip_inputs, "
+            "y held inside [output_min, output_max] when clip_output; drift_model = sum over segments"
         ),
         "segments": fitted,
         "training": {
