@@ -170,7 +170,9 @@ def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, sta
     first_step : dict
         ``{effect: Fitted}``: each candidate added alone to the baseline.
     steps : list of dict
-        Per step, each tried effect's ``delta_bic`` and ``delta_holdout``.
+        Per step: ``tried`` (each tried effect's ``delta_bic`` and
+        ``delta_holdout_deviance``, None where the fit check already failed),
+        ``accepted`` (or None) and ``dropped`` (by the backward check).
     baseline : Fitted
         The model the selection started from.
     """
@@ -180,6 +182,7 @@ def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, sta
     current_hold = holdout_fit(holdout, current)[0] if holdout is not None else None
     remaining = list(candidates)
     first_step, steps = {}, []
+    rounds = 0
     total = len(remaining)
     done = 0
     while remaining and len(current.order) - len(baseline.order) < s.max_effects:
@@ -202,22 +205,68 @@ def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, sta
                 hold_dev = holdout_fit(holdout, model)[0]
                 delta_hold = hold_dev - current_hold
                 passed = delta_hold < -s.holdout_margin
-            record[effect] = {"delta_bic": delta_bic, "delta_holdout_deviance": delta_hold, "accepted": False}
+            record[effect] = {"delta_bic": delta_bic, "delta_holdout_deviance": delta_hold}
             if passed:
-                record[effect]["accepted"] = True
                 accepted = effect
                 if holdout is not None:
                     current_hold = hold_dev
                 break
-        steps.append(record)
+        steps.append({"tried": record, "accepted": accepted, "dropped": []})
         if accepted is None:
             break
         current = trials[accepted]
         remaining.remove(accepted)
+        current, dropped = _backward(fit, baseline, current, accepted, s.bic_margin)
+        if dropped:
+            steps[-1]["dropped"] = dropped
+            remaining += [e for e in dropped if e not in remaining]
+            if holdout is not None:
+                current_hold = holdout_fit(holdout, current)[0]
+        rounds += 1
+        if rounds > 2 * len(candidates):
+            break
         total = done + len(remaining)
     if callback is not None:
         callback(total, total)
     return current, first_step, steps, baseline
+
+
+def _backward(problem: Problem, baseline: Fitted, current: Fitted, added: str, margin: float):
+    """Drop earlier effects that the newly `added` one made redundant.
+
+    An effect selected early as a stand-in (a random walk absorbing a
+    warm-up and an interference before either was modelled) no longer earns
+    its BIC margin once the real cause is in; it is removed (stepwise
+    selection) and may be chosen again later.
+    """
+    dropped = []
+    changed = True
+    while changed:
+        changed = False
+        for effect in current.order[len(baseline.order) :]:
+            if effect == added:
+                continue
+            order = tuple(e for e in current.order if e != effect)
+            spec = {k: v for k, v in current.spec.items() if k != effect}
+            smaller = _refit(problem, baseline, order, spec, current.noise)
+            if smaller.bic < current.bic + margin:
+                current, changed = smaller, True
+                dropped.append(effect)
+                break
+    return current, dropped
+
+
+def _refit(problem: Problem, baseline: Fitted, order: tuple, spec: dict, noise: NoiseModel) -> Fitted:
+    """Refit coefficients and noise of a model with given effects and nonlinear parameters."""
+    stochastic = tuple(e for e in order if e not in DETERMINISTIC)
+    values = dataclasses.asdict(noise)
+    for e in ("bias_instability", "rate_random_walk"):
+        if e not in stochastic:
+            values[e] = 0.0
+    Xb, names = problem.design_blocks(spec)
+    noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, NoiseModel(**values), ("arw",) + stochastic)
+    k = baseline.n_params + sum(N_PARAMS[e] for e in order[len(baseline.order) :])
+    return Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
 
 
 def _best_nonlinear(problem: Problem, current: Fitted, effect: str) -> dict:
