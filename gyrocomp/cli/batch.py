@@ -114,18 +114,18 @@ def _command_options(command: str, tokens: list[str]) -> dict:
     return {name: (list(ctx.params[name]) if isinstance(ctx.params[name], tuple) else ctx.params[name]) for name in given}
 
 
-def _table(result, n_figures: int = 4):
+def _table(result, n_figures: int = 3):
     from rich.table import Table
 
     table = Table(title=f"gyrocomp batch {result.command} (every figure: summary.csv)")
     figures = [c for c in result.columns if c not in ("input", "output", "status", "error", "threshold", "sha256")][:n_figures]
     table.add_column("input", overflow="fold", min_width=12)
     table.add_column("status", no_wrap=True)
-    for head in figures:
-        table.add_column(head.replace("_", " "), justify="right", no_wrap=True)
     table.add_column("error / threshold", max_width=36, overflow="fold")
+    for head in figures:
+        table.add_column(head.replace("_", " "), justify="right")
     for row in result.rows:
-        table.add_row(row["input"], row["status"], *[_cell(row[c]) for c in figures], row["error"] or row["threshold"])
+        table.add_row(row["input"], row["status"], row["error"] or row["threshold"], *[_cell(row[c]) for c in figures])
     return table
 
 

@@ -190,3 +190,32 @@ def test_job_defaults_equal_the_commands_defaults():
         for option, default in job.options.items():
             assert option in defaults, (name, option)
             assert defaults[option] == default or (defaults[option] in ((), None) and default is None), (name, option)
+
+
+@pytest.mark.slow
+def test_run_batch_pairs_each_unit_with_its_test_run(tmp_path):
+    """One calibration per unit: `--test` pairs a training log with its held-out run."""
+    sample = Path(__file__).resolve().parents[2] / "sample_data"
+    train, test = tmp_path / "train", tmp_path / "test"
+    train.mkdir(), test.mkdir()
+    shutil.copy(sample / "oven_train.parquet", train / "unit1.parquet")
+    shutil.copy(sample / "oven_test.parquet", test / "unit1.parquet")
+    out = tmp_path / "out"
+    result = _invoke(
+        "run", str(train / "*.parquet"), "--config", "compare", "--set", 'run.methods=["polynomial"]',
+        "--test", str(test / "{name}"), "--out", str(out), "--workers", "1",
+    )
+    assert result.exit_code == 0, result.output
+    row = pd.read_csv(out / "summary.csv").iloc[0]
+    assert bool(row["held_out"]) and row["polynomial_causal_drift_std_deg_h"] < row["raw_drift_std_deg_h"]
+    assert (out / "unit1" / "report.json").is_file() and (out / "unit1" / "polynomial" / "model.json").is_file()
+
+
+@pytest.mark.slow
+def test_diagnose_batch_writes_report_and_gap_figures(logs, tmp_path):
+    out = tmp_path / "out"
+    result = run_batch("diagnose", [str(logs / "unit0.parquet")], out, workers=1, options={"holdout": str(logs / "unit1.parquet")})
+    assert result.exit_code == 0, result.rows
+    row = result.rows[0]
+    assert row["gap_selected_fit"] <= row["gap_baseline_fit"] + 1e-12
+    assert sorted(p.name for p in (out / "unit0").iterdir()) == ["gap.png", MANIFEST, "report.json", "report.md"]
