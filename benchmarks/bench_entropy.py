@@ -1,0 +1,64 @@
+"""Sample and permutation entropy: gyrocomp against antropy, same run, same data.
+
+Prints the figures and writes ``benchmarks/results/entropy.json``. Timings
+on a shared machine are noisy; the ratios matter, not the seconds.
+Peak memory of gyrocomp's sample entropy is measured with tracemalloc
+(numpy allocations are traced).
+"""
+
+import json
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+from gyrocomp.entropy import permutation_entropy, sample_entropy
+
+OUT = Path(__file__).resolve().parent / "results" / "entropy.json"
+
+
+def timed(fn, *args, repeat=1, **kwargs):
+    """Value and the best wall time of `repeat` calls."""
+    best = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        value = fn(*args, **kwargs)
+        best = min(best, time.perf_counter() - t0)
+    return value, best
+
+
+def main():
+    t0 = time.perf_counter()
+    import antropy
+
+    results = {"antropy_import_s": time.perf_counter() - t0, "sample_entropy": [], "permutation_entropy": []}
+    rng = np.random.default_rng(0)
+    for n in (10_000, 100_000):
+        x = rng.standard_normal(n)
+        ours, t_ours = timed(sample_entropy, x, 2)
+        theirs, t_theirs = timed(antropy.sample_entropy, x, order=2)
+        tracemalloc.start()
+        sample_entropy(x, 2)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        row = dict(n=n, gyrocomp=ours, antropy=theirs, gyrocomp_s=t_ours, antropy_s=t_theirs,
+                   ratio=t_ours / t_theirs, gyrocomp_peak_mb=peak / 2**20)
+        results["sample_entropy"].append(row)
+        print(f"SampEn n={n}: gyrocomp {t_ours:.2f} s ({ours:.4f}), antropy {t_theirs:.2f} s ({theirs:.4f}), "
+              f"ratio {row['ratio']:.2f}, peak {row['gyrocomp_peak_mb']:.0f} MB", flush=True)
+    x = rng.standard_normal(1_000_000)
+    for order in (3, 4, 5, 6):
+        ours, t_ours = timed(permutation_entropy, x, order, repeat=3)
+        theirs, t_theirs = timed(antropy.perm_entropy, x, order=order, normalize=True, repeat=3)
+        row = dict(n=x.size, order=order, gyrocomp=ours, antropy=theirs, gyrocomp_s=t_ours, antropy_s=t_theirs,
+                   ratio=t_ours / t_theirs)
+        results["permutation_entropy"].append(row)
+        print(f"PE n=1e6 order {order}: gyrocomp {t_ours:.3f} s, antropy {t_theirs:.3f} s, ratio {row['ratio']:.2f}, "
+              f"|diff| {abs(ours - theirs):.1e}", flush=True)
+    OUT.parent.mkdir(exist_ok=True)
+    OUT.write_text(json.dumps(results, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
