@@ -195,23 +195,25 @@ def _allan_resolve(options: dict, files: dict) -> dict:
 
 def _allan_execute(source: Path, folder: Path, settings: dict, files: dict) -> tuple[dict, str]:
     from gyrocomp import allan as al
-    from gyrocomp import io
 
     config = al.get_config(files.get("config") or "allan")
-    column = settings["allan"]["column"]
-    rec = io.read_recording(source, _column_spec(settings), min_samples=3, resample=settings["resample"])
-    if column not in rec.data:
-        raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(map(str, rec.data.columns))}")
-    series = al.analyse(rec.data[column].to_numpy(), rec.fs_hz, taus=settings["allan"]["taus"], name=source.name, column=column, settings=config)
-    io.write_json(folder / "allan.json", al.allan_artefact([series], inputs=[rec.input_record()], settings=settings["allan"]))
+    series = al.write_report(
+        [source],
+        folder / "allan.json",
+        column=settings["allan"]["column"],
+        taus=settings["allan"]["taus"],
+        settings=config,
+        columns=_column_spec(settings),
+        resample=settings["resample"],
+    )
     with _PLOT_LOCK:
-        al.plot_allan([series], folder / "allan.png")
+        al.plot_allan(series, folder / "allan.png")
     figures = {}
     for key in ("arw", "bias_instability", "rrw"):
-        term = series.terms[key]
+        term = series[0].terms[key]
         figures[f"{key}_fit"] = term["value"]
         figures[f"{key}_readoff"] = term.get("readoff")
-    return figures, _threshold(al.check_thresholds, [series], **settings["thresholds"])
+    return figures, _threshold(al.check_thresholds, series, **settings["thresholds"])
 
 
 def _threshold(check, *args, **kwargs) -> str:

@@ -54,28 +54,12 @@ def allan(
     3 s) and exit 3 naming the series and the figure.
     """
     from gyrocomp import allan as al
-    from gyrocomp import io
-    from gyrocomp.config import settings_dict
-    from gyrocomp.errors import InputError
 
     console = console_for(ctx, out)
     with report_errors(ctx):
         settings = al.get_config(config)
         spec = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
-        series, inputs = [], []
-        for path in recordings:
-            rec = io.read_recording(path, spec, min_samples=3, resample=resample)
-            if column not in rec.data:
-                raise InputError(
-                    f"{rec.name}: no column {column!r} to analyse; it has {', '.join(map(str, rec.data.columns))}"
-                )
-            series.append(
-                al.analyse(rec.data[column].to_numpy(), rec.fs_hz, taus=taus, name=Path(rec.name).name, column=column, settings=settings)
-            )
-            inputs.append(rec.input_record())
-            del rec
-        resolved = {**settings_dict(settings), "taus": taus or settings.taus, "column": column}
-        io.write_json(out, al.allan_artefact(series, inputs=inputs, settings=resolved))
+        series = al.write_report(recordings, out, column=column, taus=taus, settings=settings, columns=spec, resample=resample)
         if plot is not None:
             al.plot_allan(series, plot)
         console.print(_table(series))

@@ -219,3 +219,11 @@ def test_diagnose_batch_writes_report_and_gap_figures(logs, tmp_path):
     row = result.rows[0]
     assert row["gap_selected_fit"] <= row["gap_baseline_fit"] + 1e-12
     assert sorted(p.name for p in (out / "unit0").iterdir()) == ["gap.png", MANIFEST, "report.json", "report.md"]
+
+
+def test_batch_allan_writes_what_the_allan_command_writes(logs, tmp_path):
+    """Both call gyrocomp.allan.write_report: same allan.json bytes."""
+    single = tmp_path / "single.json"
+    assert CliRunner().invoke(app, ["-q", "allan", str(logs / "unit2.parquet"), "--out", str(single)]).exit_code == 0
+    run_batch("allan", [str(logs / "unit2.parquet")], tmp_path / "b", workers=1)
+    assert (tmp_path / "b" / "unit2" / "allan.json").read_bytes() == single.read_bytes()
