@@ -241,7 +241,7 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
         "kind": pipeline.kind,
         "parallel": pipeline.parallel,
         "fs_hz": float(fs_hz),
-        "inputs": list(INPUTS),
+        "input_columns": list(INPUTS),
         "rate_estimator": rate_estimator.describe(rate_cfg, fs_hz),
         "clip_inputs": model_table.clip_inputs,
         "clip_output": model_table.clip_output,
