@@ -227,3 +227,10 @@ def test_batch_allan_writes_what_the_allan_command_writes(logs, tmp_path):
     assert CliRunner().invoke(app, ["-q", "allan", str(logs / "unit2.parquet"), "--out", str(single)]).exit_code == 0
     run_batch("allan", [str(logs / "unit2.parquet")], tmp_path / "b", workers=1)
     assert (tmp_path / "b" / "unit2" / "allan.json").read_bytes() == single.read_bytes()
+
+
+def test_scheduler_without_dask_is_a_clear_exit_2(logs, tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)  # import fails as if not installed
+    result = _invoke("allan", str(logs / "unit0.parquet"), "--out", str(tmp_path / "o"), "--scheduler", "tcp://127.0.0.1:1")
+    assert result.exit_code == 2
+    assert "pip install 'gyrocomp[dask]'" in result.output
