@@ -40,12 +40,14 @@ class DecomposeSettings:
     Parameters
     ----------
     method : {"lcd", "iceemdan", "ceemdan", "emd"}
-    stop : {"rilling", "sd"}
+    stop : {"rilling", "sd", "s_number", "fixed"}
         Sifting stop of the EMD family (see :class:`~gyrocomp.decompose.emd.Sifting`).
     thresholds : tuple of float
         Rilling's (theta1, theta2, alpha) = (0.05, 0.5, 0.05).
     sd_threshold : float
         Huang's SD threshold when ``stop = "sd"``.
+    s_number : int
+        S of Huang et al.'s (2003) S-number rule when ``stop = "s_number"``.
     max_sift : int
         Most sifting iterations per component (all methods).
     max_imfs : int
@@ -65,10 +67,11 @@ class DecomposeSettings:
     """
 
     method: str = "lcd"
-    stop: str = "rilling"
+    stop: str = "fixed"
     thresholds: tuple = (0.05, 0.5, 0.05)
     sd_threshold: float = 0.2
-    max_sift: int = 2000
+    s_number: int = 4
+    max_sift: int = 10
     max_imfs: int = 30
     ensemble: int = 100
     noise_strength: float = 0.2
@@ -100,6 +103,7 @@ class DecomposeSettings:
             stop=self.stop,
             thresholds=tuple(self.thresholds),
             sd_threshold=self.sd_threshold,
+            s_number=self.s_number,
             max_sift=self.max_sift,
         )
 

@@ -76,3 +76,39 @@ def test_bad_sifting_settings():
         E.Sifting(stop="cauchy")
     with pytest.raises(ValueError, match="max_sift"):
         E.Sifting(max_sift=0)
+
+
+@pytest.mark.parametrize(
+    "sifting",
+    [
+        E.Sifting(),
+        E.Sifting(max_sift=200),
+        E.Sifting(stop="sd"),
+        E.Sifting(stop="s_number", s_number=3, max_sift=50),
+        E.Sifting(stop="fixed", max_sift=7),
+    ],
+    ids=["rilling", "rilling200", "sd", "s_number", "fixed"],
+)
+def test_compiled_kernel_equals_numpy_path(sifting):
+    """The numba kernel computes the numpy path's sift (same algorithm and order): same bytes.
+
+    Rows: white noise, random walks and coarsely rounded walks (plateaus).
+    """
+    kernel = pytest.importorskip("gyrocomp.decompose._compiled")
+    rng = np.random.default_rng(11)
+    rows = np.vstack([rng.standard_normal((3, 400)), rng.standard_normal((3, 400)).cumsum(1)])
+    rows = np.vstack([rows, np.round(rows[3:], 1)])
+    ref = E._sift(rows, sifting, E._mean_envelope, E._energy_stop(sifting))
+    theta1, theta2, alpha = sifting.thresholds
+    got = kernel.sift_rows(
+        rows, kernel.STOPS[sifting.stop], theta1, theta2, alpha, sifting.sd_threshold, sifting.s_number, sifting.max_sift
+    )
+    assert_allclose(got, ref, rtol=0, atol=1e-12 * np.max(np.abs(rows)))
+
+
+def test_s_number_stops_on_a_proto_imf():
+    """A pure tone already satisfies S-number's count condition: S sifts later the IMF is the tone."""
+    t = np.arange(2000)
+    x = np.sin(2 * np.pi * t / 50)[None]
+    imf = E.sift(x, E.Sifting(stop="s_number", s_number=4, max_sift=100))
+    assert np.max(np.abs(imf[0, 100:-100] - x[0, 100:-100])) < 0.01
