@@ -80,7 +80,10 @@ def _print_table(console, entries, settings) -> None:
     from rich.table import Table
 
     label = "PE (normalised)" if settings.entropy == "permutation" else "SampEn [nats]"
-    table = Table(title=f"{settings.entropy} entropy: noise > {settings.noise_above:g}, drift < {settings.drift_below:g}")
+    table = Table(
+        title=f"{settings.entropy} entropy",
+        caption=f"noise > {settings.noise_above:g} >= mixed >= {settings.drift_below:g} > drift",
+    )
     table.add_column("component")
     table.add_column(label, justify="right")
     table.add_column("class")
