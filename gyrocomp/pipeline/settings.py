@@ -153,7 +153,7 @@ class ModelSettings:
     segments: dict
     clip_inputs: bool = True
     clip_output: bool = True
-    max_samples: int = 5000
+    max_samples: int = 2000
 
     def to_dict(self) -> dict:
         head = {"clip_inputs": self.clip_inputs, "clip_output": self.clip_output, "max_samples": self.max_samples}
@@ -186,7 +186,7 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
     for key, value in clips.items():
         if not isinstance(value, bool):
             raise InputError(f"{source} [model]: {key} = {value!r} should be true or false")
-    max_samples = table.pop("max_samples", 5000)
+    max_samples = table.pop("max_samples", 2000)
     if isinstance(max_samples, bool) or not isinstance(max_samples, int) or max_samples < 0:
         raise InputError(f"{source} [model]: max_samples = {max_samples!r} should be an integer >= 0")
     allowed = SEGMENTS if parallel else ("drift",)
