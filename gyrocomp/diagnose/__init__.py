@@ -48,7 +48,7 @@ class DiagnoseSettings:
     max_blocks: int = 720
     bic_margin: float = 10.0
     holdout_margin: float = 6.0
-    max_effects: int = 4
+    max_effects: int = 8
     min_temperature_span_c: float = 2.0
     temp_rate_smooth_s: float = 60.0
     thermal_lag_tau_s: tuple = (20.0, 7200.0)

@@ -89,7 +89,7 @@ def plot_gap(report: dict, path: str | os.PathLike) -> None:
         for k, (model, color) in enumerate((("baseline", "tab:red"), ("selected", "tab:blue"))):
             vals = [loc[model]["regime"].get(r, {}).get("rms_deg_h", np.nan) for r in regimes]
             row[0].bar(x + (k - 0.5) * 0.4, vals, width=0.4, color=color, label=model)
-        noise = [loc["baseline"]["regime"][r]["expected_rms_deg_h"] for r in regimes]
+        noise = [loc["selected"]["regime"].get(r, {}).get("expected_rms_deg_h", np.nan) for r in regimes]
         row[0].plot(x, noise, "k_", markersize=14, label="noise (selected model)")
         row[0].set_xticks(x, regimes, rotation=45, ha="right", fontsize=8)
         row[0].set_ylabel("residual 100 s RMS [deg/h]")
