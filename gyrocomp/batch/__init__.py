@@ -144,7 +144,7 @@ def run_batch(
         if scheduler is not None:
             results = backends.run_dask(process_input, tasks, scheduler=scheduler)
         else:
-            results = backends.run_local(process_input, tasks, workers=workers)
+            results = backends.run_local(process_input, tasks, workers=workers, preload=job.preload)
         for task, result in results:
             if isinstance(result, BaseException):
                 result = _worker_died(task, result)

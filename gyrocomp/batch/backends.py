@@ -8,8 +8,8 @@ worker died yields the exception instead of a result.
 * :func:`run_local`: ``workers=1`` runs in this process (no start-up
   cost, easiest to debug); more workers use a
   :class:`concurrent.futures.ProcessPoolExecutor` whose processes are
-  forked from a *forkserver* that has already imported gyrocomp, numpy and
-  pandas (safe with threads, and cheap per worker).
+  forked from a *forkserver* that has already imported gyrocomp, numpy,
+  pandas and the stage's modules (safe with threads, and cheap per worker).
 * :func:`run_dask`: an existing ``dask.distributed`` scheduler (the
   optional ``dask`` extra); every worker must see the inputs and the
   output folder at the same paths (a shared file system).
@@ -20,7 +20,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import multiprocessing
 import os
-from typing import Callable, Iterable, Iterator
+from typing import Callable, Iterable, Iterator, Sequence
 
 from gyrocomp.errors import InputError
 
@@ -38,7 +38,9 @@ def default_workers() -> int:
         return os.cpu_count() or 1
 
 
-def run_local(fn: Callable[[dict], dict], tasks: Iterable[dict], *, workers: int | None = None) -> Iterator[tuple[dict, dict | BaseException]]:
+def run_local(
+    fn: Callable[[dict], dict], tasks: Iterable[dict], *, workers: int | None = None, preload: Sequence[str] = ()
+) -> Iterator[tuple[dict, dict | BaseException]]:
     """Run `fn` over `tasks` here (``workers=1``) or in a pool of worker processes.
 
     Parameters
@@ -49,6 +51,10 @@ def run_local(fn: Callable[[dict], dict], tasks: Iterable[dict], *, workers: int
     workers : int or None
         Processes; ``None`` uses every core (:func:`default_workers`).
         Never more than there are tasks.
+    preload : sequence of str
+        Modules for the forkserver to import besides gyrocomp's core, so
+        that no worker pays for them per input. They take effect when this
+        process starts its forkserver (its first pool).
     """
     tasks = list(tasks)
     n = default_workers() if workers is None else int(workers)
@@ -60,7 +66,7 @@ def run_local(fn: Callable[[dict], dict], tasks: Iterable[dict], *, workers: int
             yield task, fn(task)
         return
     context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(_PRELOAD)
+    context.set_forkserver_preload([*_PRELOAD, *preload])
     with cf.ProcessPoolExecutor(max_workers=n, mp_context=context) as pool:
         futures = {pool.submit(fn, task): task for task in tasks}
         for future in cf.as_completed(futures):

@@ -76,6 +76,9 @@ class Job:
     file_options : tuple of str
         Options that name a file every input uses; they travel in `files`
         (as absolute paths), and the settings hold their SHA-256.
+    preload : tuple of str
+        Modules the stage imports; worker processes import them before
+        the first input arrives (:func:`gyrocomp.batch.backends.run_local`).
     """
 
     name: str
@@ -83,6 +86,7 @@ class Job:
     resolve: Callable[[dict, dict], dict]
     execute: Callable[[Path, Path, dict, dict], tuple[dict, str]]
     file_options: tuple = ()
+    preload: tuple = ()
 
 
 def get_job(command: str) -> Job:
@@ -393,11 +397,24 @@ JOBS: dict[str, Job] = {
         {"column": "rate", "taus": None, "max_arw": None, "max_bias_instability": None, "max_rrw": None, **_COLUMN_OPTIONS, "resample": False},
         _allan_resolve,
         _allan_execute,
+        preload=("gyrocomp.allan", "matplotlib.figure", "matplotlib.backends.backend_agg"),
     ),
-    "compensate": Job("compensate", {"mode": "causal", "seed": None, **_COLUMN_OPTIONS, "resample": False}, _compensate_resolve, _compensate_execute),
-    "run": Job("run", {"test": None, "seed": 0, "assignments": None, **_COLUMN_OPTIONS}, _run_resolve, _run_execute),
+    "compensate": Job(
+        "compensate",
+        {"mode": "causal", "seed": None, **_COLUMN_OPTIONS, "resample": False},
+        _compensate_resolve,
+        _compensate_execute,
+        preload=("gyrocomp.pipeline",),
+    ),
+    "run": Job(
+        "run",
+        {"test": None, "seed": 0, "assignments": None, **_COLUMN_OPTIONS},
+        _run_resolve,
+        _run_execute,
+        preload=("gyrocomp.pipeline", "matplotlib.pyplot"),
+    ),
     "diagnose": Job(
-        "diagnose", {"holdout": None, "sim": None, **_COLUMN_OPTIONS, "resample": False}, _diagnose_resolve, _diagnose_execute, ("sim",)
+        "diagnose", {"holdout": None, "sim": None, **_COLUMN_OPTIONS, "resample": False}, _diagnose_resolve, _diagnose_execute, ("sim",), ("gyrocomp.diagnose", "matplotlib.pyplot")
     ),
 }
 """The batchable commands by name."""
