@@ -86,15 +86,19 @@ def _sift_one(x, h, stop, theta1, theta2, alpha, sd_threshold, s_number, max_sif
                         worst = True
                 if not (beyond / n > alpha or worst) and abs(n_zero - n_ext) <= 1:
                     return
-        energy = 0.0
-        change = 0.0
-        for j in range(n):
-            m = 0.5 * (upper[j] + lower[j])
-            energy += h[j] * h[j]
-            change += m * m
-            h[j] = h[j] - m
-        if stop == 1 and not change > sd_threshold * energy:
-            return
+        if stop == 1:
+            energy = 0.0
+            change = 0.0
+            for j in range(n):
+                m = 0.5 * (upper[j] + lower[j])
+                energy += h[j] * h[j]
+                change += m * m
+                h[j] = h[j] - m
+            if not change > sd_threshold * energy:
+                return
+        else:
+            for j in range(n):
+                h[j] = h[j] - 0.5 * (upper[j] + lower[j])
 
 
 @numba.njit(cache=True)
@@ -126,12 +130,10 @@ def _extrema(x, imax, imin):
             continue
         sign = 1 if d > 0 else -1
         at = i if flat_from < 0 else (flat_from + i + 1) // 2
-        if before > 0 and sign < 0:
-            imax[n_max] = at
-            n_max += 1
-        elif before < 0 and sign > 0:
-            imin[n_min] = at
-            n_min += 1
+        imax[n_max] = at  # written always, kept when counted: no branch on noisy data
+        imin[n_min] = at
+        n_max += before > 0 and sign < 0
+        n_min += before < 0 and sign > 0
         before = sign
         flat_from = -1
     return n_max, n_min
