@@ -86,6 +86,18 @@ def test_sample_entropy_matches_brute_force(m, quantised):
     assert_allclose(sample_entropy(x, m, r), _sampen_brute(x, m, r), rtol=1e-12)
 
 
+@pytest.mark.parametrize("subcells", [(3, 0.0), (8, 0.0)])
+def test_sample_entropy_fine_cells_match_brute_force(monkeypatch, subcells):
+    """Cells finer than r (used on long signals) count the same pairs."""
+    import gyrocomp.entropy as entropy
+
+    monkeypatch.setattr(entropy, "_SUBCELLS", {2: subcells, 3: subcells, 4: subcells})
+    rng = np.random.default_rng(9)
+    x = np.round(rng.standard_normal(1200) * 8) / 8  # ties at distance r = 0.25
+    for m in (1, 2, 3):
+        assert_allclose(sample_entropy(x, m, 0.25), _sampen_brute(x, m, 0.25), rtol=1e-12)
+
+
 def test_sample_entropy_white_noise_theory():
     """Gaussian white noise, r = 0.2 sigma: SampEn -> -ln(2 Phi(0.2/sqrt 2) - 1) = 2.1851."""
     x = np.random.default_rng(7).standard_normal(50_000)
