@@ -99,7 +99,7 @@ def test_withheld_effects_are_found(seed, effects, truth):
 def test_static_recording_is_diagnosed_on_its_stochastic_part():
     """Without temperature, the temperature effects are skipped and said so."""
     rng = np.random.default_rng(1)
-    n = 4 * 3600
+    n = 2 * 3600
     t = np.arange(n, dtype=float)
     from gyrocomp.sim import noise as sim_noise
 
