@@ -133,8 +133,10 @@ def allan_terms(x, fs_hz: float, settings: EvaluateSettings = EvaluateSettings()
     Both papers read the terms off the Allan curve (Cao et al. 2021, Fig. 17;
     Zhang et al. 2024, Fig. 15), so the IEEE Std 952 read-off is reported:
     ARW on the -1/2 line at tau = 1 s, bias instability the curve's first
-    minimum / 0.664. Where the curve has no -1/2 line (a heavily smoothed
-    output) the five-term fit's value stands in, and ``source`` says so.
+    minimum / 0.664. Where the curve has no -1/2 line starting at the
+    shortest tau (a smoothed output, whose only -1/2 stretch may lie at long
+    tau and would be extrapolated to 1 s), the five-term fit's value stands
+    in, and ``source`` says so.
 
     Returns
     -------
@@ -150,6 +152,8 @@ def allan_terms(x, fs_hz: float, settings: EvaluateSettings = EvaluateSettings()
     for name in ("arw", "bias_instability"):
         term = series.terms[name]
         readoff = term.get("readoff")
+        if name == "arw" and readoff is not None and term["readoff_tau_s"][0] > series.tau_s[0]:
+            readoff = None
         out[name] = {
             "value": term["value"] if readoff is None else readoff,
             "unit": term["unit"],

@@ -298,12 +298,16 @@ def _score(name, mode, output, kept, fs_hz, settings: EvaluateSettings, info: di
 
 
 def _with_signal(recording: io.Recording, signal: np.ndarray) -> io.Recording:
+    """The test run with the injected rate added; its hash covers the file's hash and the signal."""
+    import hashlib
+
     data = recording.data.copy()
     data["rate"] = data["rate"].to_numpy() + signal
+    digest = hashlib.sha256(recording.sha256.encode() + np.ascontiguousarray(signal).tobytes()).hexdigest()
     return io.Recording(
         data=data,
         name=f"{recording.name}+signal",
-        sha256=recording.sha256,
+        sha256=digest,
         fs_hz=recording.fs_hz,
         metadata=recording.metadata,
     )
