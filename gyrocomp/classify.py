@@ -21,6 +21,12 @@ __all__ = ["ENTROPIES", "PermutationSettings", "SampleSettings", "ClassifySettin
 ENTROPIES = ("permutation", "sample")
 
 
+def _check_thresholds(kind: str, noise_above: float, drift_below: float) -> None:
+    """Defined first: the settings classes build default instances at import."""
+    if not drift_below <= noise_above:
+        raise InputError(f"{kind}: drift_below = {drift_below} must not exceed noise_above = {noise_above}")
+
+
 @dataclasses.dataclass(frozen=True)
 class PermutationSettings:
     """``[classify.permutation]``: normalised PE and its thresholds (Cao et al. 2021)."""
@@ -145,8 +151,3 @@ def class_of(value: float, settings: ClassifySettings = ClassifySettings()) -> s
     if value < settings.drift_below:
         return "drift"
     return "mixed"
-
-
-def _check_thresholds(kind: str, noise_above: float, drift_below: float) -> None:
-    if not drift_below <= noise_above:
-        raise InputError(f"{kind}: drift_below = {drift_below} must not exceed noise_above = {noise_above}")
