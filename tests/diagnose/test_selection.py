@@ -88,7 +88,7 @@ def test_thermal_lag_is_not_mistaken_for_temp_rate():
             dict(warmup=Warmup(amplitude_dps=0.02, tau_s=600.0), periodic=Periodic(enabled=True, amplitude_dps=0.004, period_s=1200.0)),
             ["warmup", "periodic"],
         ),
-        (900, dict(thermal_lag=ThermalLag(tau_s=200.0), bias_instability=BiasInstability(b_deg_per_h=15.0)), ["thermal_lag", "bias_instability"]),
+        (900, dict(thermal_lag=ThermalLag(tau_s=500.0), bias_instability=BiasInstability(b_deg_per_h=15.0)), ["thermal_lag", "bias_instability"]),
     ],
 )
 def test_withheld_effects_are_found(seed, effects, truth):
