@@ -358,26 +358,19 @@ def _diagnose_resolve(options: dict, files: dict) -> dict:
 
 
 def _diagnose_execute(source: Path, folder: Path, settings: dict, files: dict) -> tuple[dict, str]:
-    from gyrocomp import io
-    from gyrocomp.diagnose import diagnose, get_config
-    from gyrocomp.diagnose.report import plot_gap, to_json, to_markdown
+    from gyrocomp.diagnose import get_config
+    from gyrocomp.diagnose.report import plot_gap, write_report
 
-    config = get_config(files.get("config") or "diagnose")
-    columns = _column_spec(settings)
-    holdout = _paired(settings["holdout"], source, "--holdout")
-    fit_rec = io.read_recording(source, columns, resample=settings["resample"], min_samples=64)
-    hold_rec = None if holdout is None else io.read_recording(holdout, columns, resample=settings["resample"], min_samples=64)
-    start = ()
-    if files.get("sim"):
-        from gyrocomp.sim.model import load_sim_config
-
-        start = tuple(load_sim_config(files["sim"]).gyro.active_effects())
-    body = diagnose(fit_rec, hold_rec, config, start_effects=start)
-    inputs = [fit_rec.input_record()] + ([hold_rec.input_record()] if hold_rec else [])
-    report = to_json(body, inputs=inputs, settings=settings["diagnose"])
-    io.write_json(folder / "report.json", report)
-    with io.atomic_path(folder / "report.md") as tmp:
-        Path(tmp).write_text(to_markdown(report), encoding="utf-8")
+    report = write_report(
+        source,
+        folder / "report.json",
+        holdout=_paired(settings["holdout"], source, "--holdout"),
+        settings=get_config(files.get("config") or "diagnose"),
+        sim=files.get("sim"),
+        columns=_column_spec(settings),
+        resample=settings["resample"],
+        markdown=folder / "report.md",
+    )
     with _PLOT_LOCK:
         plot_gap(report, folder / "gap.png")
     gap = report["gap"]

@@ -50,31 +50,15 @@ def diagnose(
     name the unmodelled effects that explain the rest, and show where the gap lies and how
     far it shrinks on the held-out run."""
     with report_errors(ctx):
-        from pathlib import Path as _Path
-
-        from gyrocomp import io
-        from gyrocomp.config import settings_dict
-        from gyrocomp.diagnose import diagnose as run_diagnosis
         from gyrocomp.diagnose import get_config
-        from gyrocomp.diagnose.report import plot_gap, summary_table, to_json, to_markdown
+        from gyrocomp.diagnose.report import plot_gap, summary_table, write_report
 
         columns = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
         settings = get_config(config)
-        fit_rec = io.read_recording(fit, columns, resample=resample, min_samples=64)
-        hold_rec = io.read_recording(holdout, columns, resample=resample, min_samples=64) if holdout else None
-        start = ()
-        if sim is not None:
-            from gyrocomp.sim.model import load_sim_config
-
-            start = tuple(load_sim_config(sim).gyro.active_effects())
         with progress(ctx, "diagnose: fitting candidates", out) as update:
-            body = run_diagnosis(fit_rec, hold_rec, settings, start_effects=start, callback=update)
-        inputs = [fit_rec.input_record()] + ([hold_rec.input_record()] if hold_rec else [])
-        report = to_json(body, inputs=inputs, settings=settings_dict(settings))
-        io.write_json(out, report)
-        if markdown is not None:
-            with io.atomic_path(markdown) as tmp:
-                _Path(tmp).write_text(to_markdown(report), encoding="utf-8")
+            report = write_report(
+                fit, out, holdout=holdout, settings=settings, sim=sim, columns=columns, resample=resample, markdown=markdown, callback=update
+            )
         if plot is not None:
             plot_gap(report, plot)
         console_for(ctx, out).print(summary_table(report))
