@@ -247,19 +247,18 @@ def _compensate_resolve(options: dict, files: dict) -> dict:
 
 
 def _compensate_execute(source: Path, folder: Path, settings: dict, files: dict) -> tuple[dict, str]:
-    from gyrocomp import io
     from gyrocomp.pipeline import evaluate
-    from gyrocomp.pipeline.compensate import compensate, load_model
-    from gyrocomp.pipeline.run import write_compensation
+    from gyrocomp.pipeline.run import compensate_to_files
 
-    model_path = Path(files["model"])
-    drift = load_model(io.read_json(model_path, "gyrocomp.model"), str(model_path))
-    rec = io.read_recording(source, _column_spec(settings), require_temperature=True, min_samples=2, resample=settings["resample"])
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        frame, summary = compensate(rec, drift, settings["mode"], seed=settings["seed"], workers=1)
-    summary["warnings"] = sorted({str(w.message) for w in caught} | set(summary.get("warnings", [])))
-    write_compensation(folder / "compensated.parquet", frame, summary, rec, model_path, settings["mode"], settings["seed"])
+    frame, summary, rec, caught = compensate_to_files(
+        source,
+        files["model"],
+        folder / "compensated.parquet",
+        mode=settings["mode"],
+        seed=settings["seed"],
+        columns=_column_spec(settings),
+        resample=settings["resample"],
+    )
     figures = {}
     for column in ("compensated", "rate"):
         try:
@@ -268,7 +267,7 @@ def _compensate_execute(source: Path, folder: Path, settings: dict, files: dict)
             drift_figures = {"std_deg_h": None, "p2p_deg_h": None}
         figures[f"{column}_drift_std_deg_h"] = drift_figures["std_deg_h"]
         figures[f"{column}_drift_p2p_deg_h"] = drift_figures["p2p_deg_h"]
-    figures["n_warnings"] = len(summary["warnings"])
+    figures["n_warnings"] = len({str(w.message) for w in caught} | set(summary.get("warnings", [])))
     return figures, ""
 
 

@@ -35,26 +35,16 @@ def compensate(
     temperature range, and by how much. A foreign, corrupted or newer
     model.json is refused with exit code 2.
     """
-    import warnings
-
     with report_errors(ctx):
-        from gyrocomp import io
-        from gyrocomp.pipeline.compensate import compensate as apply, load_model
-        from gyrocomp.pipeline.run import write_compensation
+        from gyrocomp.pipeline.run import compensate_to_files
 
-        drift = load_model(io.read_json(model, "gyrocomp.model"), str(model))
         spec = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
-        rec = io.read_recording(recording, spec, require_temperature=True, min_samples=2, resample=resample)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            with progress(ctx, f"compensate ({mode})", out) as update:
-                frame, summary = apply(rec, drift, mode, seed=seed, workers=workers, callback=update)
+        with progress(ctx, f"compensate ({mode})", out) as update:
+            frame, summary, _, caught = compensate_to_files(
+                recording, model, out, mode=mode, seed=seed, workers=workers, columns=spec, resample=resample, callback=update
+            )
         for warning in caught:
             print(f"gyrocomp: warning: {warning.message}", file=sys.stderr)
-        if str(out) == "-":
-            io.write_table(out, frame, {})
-        else:
-            write_compensation(out, frame, summary, rec, model, mode, seed)
     console = console_for(ctx, out)
     console.print(
         f"{out}: {len(frame)} samples compensated by {summary['kind']} ({mode}); "

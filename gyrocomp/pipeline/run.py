@@ -34,7 +34,7 @@ from gyrocomp.pipeline.compensate import COMPENSATION_SCHEMA, compensate, load_m
 from gyrocomp.pipeline.settings import EvaluateSettings, RunSettings, SignalSettings, pipeline_settings
 from gyrocomp.pipeline.train import file_record, train_direct, train_parallel
 
-__all__ = ["REPORT_SCHEMA", "load_run_config", "run", "decompose_and_classify", "write_compensation"]
+__all__ = ["REPORT_SCHEMA", "load_run_config", "run", "decompose_and_classify", "write_compensation", "compensate_to_files"]
 
 REPORT_SCHEMA = "gyrocomp.report"
 
@@ -234,6 +234,45 @@ def write_compensation(path: Path, frame, summary: dict, recording: io.Recording
     sidecar = {**header, **summary, "figures": figures}
     io.write_json(path.with_suffix(".json"), sidecar)
     return sidecar
+
+
+def compensate_to_files(
+    recording_path: str | os.PathLike,
+    model_path: str | os.PathLike,
+    out: str | os.PathLike,
+    *,
+    mode: str = "causal",
+    seed: int | None = None,
+    workers: int = 1,
+    columns: io.ColumnSpec = io.ColumnSpec(),
+    resample: bool = False,
+    callback=None,
+) -> tuple:
+    """Read a model and a recording, compensate, write the artefacts: ``gyrocomp compensate`` as a function.
+
+    The sequence ``gyrocomp compensate`` and ``gyrocomp batch compensate``
+    share. `out` ``-`` writes the table as CSV to stdout, without sidecar.
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+        ``time``, ``rate``, ``temperature``, ``drift_model``, ``compensated``.
+    summary : dict
+        From :func:`~gyrocomp.pipeline.compensate.compensate`.
+    recording : gyrocomp.io.Recording
+    caught : list of warnings.WarningMessage
+        The warnings compensating raised (e.g. leaving the training temperature range).
+    """
+    drift = load_model(io.read_json(model_path, "gyrocomp.model"), str(model_path))
+    recording = io.read_recording(recording_path, columns, require_temperature=True, min_samples=2, resample=resample)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        frame, summary = compensate(recording, drift, mode, seed=seed, workers=workers, callback=callback)
+    if str(out) == "-":
+        io.write_table(out, frame, {})
+    else:
+        write_compensation(Path(out), frame, summary, recording, Path(model_path), mode, seed)
+    return frame, summary, recording, list(caught)
 
 
 def _train_method(config, source, name, train_rec, folder: Path, seed, workers, step):
