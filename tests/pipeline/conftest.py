@@ -48,6 +48,12 @@ def recording(levels, seed, *, hold_s=1500.0, name="run.parquet", gyro=None, sta
 
 
 @pytest.fixture(scope="session")
+def make_recording():
+    """:func:`recording`, for tests that simulate runs of their own."""
+    return recording
+
+
+@pytest.fixture(scope="session")
 def oven_pair():
     """Training run (10 degC steps from 50 down to -30 degC) and a held-out run (another seed, 20 degC steps, longer soaks).
 

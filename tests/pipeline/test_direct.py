@@ -104,8 +104,8 @@ def test_causal_mode_keeps_a_true_angular_rate(trained, oven_pair):
     assert abs(kept["gain"] - 1) < 1e-12 and kept["rms_error_dps"] < 1e-12
 
 
-def test_out_of_range_recording_warns_by_how_much(trained):
-    from conftest import recording
+def test_out_of_range_recording_warns_by_how_much(make_recording, trained):
+    recording = make_recording
 
     hot, _ = recording([60, 40], seed=3, hold_s=600.0, name="hot.parquet")
     with pytest.warns(ExtrapolationWarning, match=r"leaves the training range \[-29.9, 49.9\] degC .* by 9.[5-9]\d* degC above"):

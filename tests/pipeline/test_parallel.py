@@ -59,9 +59,9 @@ def test_cli_chain_round_trips_and_compensates_a_held_out_run(tmp_path, oven_fil
         assert raw / left >= factor, f"{config} {mode}: {raw:.1f} -> {left:.2f} deg/h"
 
 
-def test_full_pipeline_improves_arw_and_bias_instability_on_sample_like_data(tmp_path):
+def test_full_pipeline_improves_arw_and_bias_instability_on_sample_like_data(make_recording, tmp_path):
     """The papers' qualitative claim (Cao 2021 Fig. 17): ARW and bias instability fall after PE-LCD-ANFIS."""
-    from conftest import recording
+    recording = make_recording
     from gyrocomp.sim import GyroSettings
 
     gyro = GyroSettings()  # the sample data's gyro: ARW 1 deg/sqrt(h), flicker, random walk, warm-up
@@ -112,8 +112,8 @@ def test_train_refuses_mismatched_inputs(tmp_path, oven_files):
     assert result.exit_code == 2 and "n_hiden" in result.output
 
 
-def test_compensate_cli_warns_out_of_range_on_stderr(tmp_path, oven_files):
-    from conftest import recording
+def test_compensate_cli_warns_out_of_range_on_stderr(make_recording, tmp_path, oven_files):
+    recording = make_recording
 
     model = tmp_path / "elm.json"
     _invoke(["train", oven_files[0], "--config", "elm", "--out", model])
