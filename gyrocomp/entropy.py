@@ -9,9 +9,9 @@ non-strict matching, template counts). Each docstring states ours and how
 antropy and EntropyHub differ.
 
 Both functions are vectorised: permutation entropy by b(b-1)/2 array
-comparisons (no per-window sort), sample entropy by exact pair counting on
-a grid of cells with a sorted first coordinate, in O(N) memory, instead of
-the O(N^2) pair loop.
+comparisons (no per-window sort), sample entropy by counting the matching
+template pairs (sweeps with Fenwick trees, compiled with numba) in
+O(N log^2 N) time and O(N) memory, instead of the O(N^2) pair loop.
 """
 
 from __future__ import annotations
@@ -29,18 +29,11 @@ __all__ = ["permutation_entropy", "sample_entropy"]
 _BINCOUNT_BITS = 22
 """Longest pattern code (bits) counted with ``np.bincount``; beyond it ``np.unique``."""
 
-_SUBCELLS = {2: (8, 1 / 2), 3: (2, 1 / 3)}
-"""Cells per tolerance r along each gridded coordinate, by template length.
-
-g = round(g0 * (N / 1e5) ** p), at least 1; lengths not listed use g = 1.
-Templates fewer than g cells apart match in that coordinate without a
-check; exactly g apart they are checked; more, never. Finer cells check
-fewer pairs (cost ~ N^2 / g) but search more neighbour cells
-(cost ~ g^(dim - 1) N log N); g0 was the fastest on 1e5 samples of white
-noise and p balances the two costs as N grows."""
-
 _PAIR_CHUNK = 1 << 20
-"""Candidate template pairs checked per vectorised step (bounds the memory)."""
+"""Candidate template pairs checked per vectorised step of the grid search (bounds the memory)."""
+
+_COUNTED_DIMS = 3
+"""Longest template counted by the compiled sweeps; longer ones use the grid search."""
 
 
 def permutation_entropy(x, order=3, delay=1, normalize=True):
@@ -183,17 +176,20 @@ def sample_entropy(x, m=2, r=None):
     returns the vector for m = 0..M from an N x N comparison matrix
     (O(N^2) memory).
 
-    Algorithm: templates are sorted by their first value inside cells of
-    width r/g over their other values (g = 8 for length 2 and 2 for length
-    3 at 1e5 samples, growing with N; else 1). Templates fewer than g cells apart match in those coordinates,
-    so their count is a difference of two ``searchsorted`` positions; pairs
-    exactly g cells apart are checked explicitly in vectorised chunks.
-    Memory is O(N) plus a fixed chunk. Time is O(N log N) plus the checked
-    pairs, a few 1e-4 N^2 for white noise at m = 2: far fewer than the N^2
-    pairs, but still quadratic (about 0.6 s at 1e5 samples, minutes at 1e6).
-    The first coordinate matches when x_j lies in (x_i - r, x_i + r) as
-    computed in floating point, which equals |x_j - x_i| < r except within
-    one rounding of x_i +- r.
+    Algorithm: the pairs are counted, never enumerated, so the cost does
+    not depend on how many match (smooth components, whose templates
+    nearly all match, cost the same as white noise). Templates are sorted
+    by their first value and the other values replaced by ranks. Length 1
+    is a sliding window over the sort; length 2 adds a Fenwick tree over
+    the ranks of the second value (O(N log N)); length 3 cuts the sort into
+    cells of width r, counts inside a cell by a 2-D sweep and across
+    neighbouring cells by an offline divide and conquer with a Fenwick tree
+    (O(N log^2 N)). Memory is O(N). Longer templates (m >= 3) use a grid of
+    cells of width r with explicit checks of the pairs in neighbouring
+    cells, quadratic in the near pairs. Every comparison is
+    ``abs(u - v) < r`` in floating point, as in the O(N^2) loop. The
+    compiled kernels (numba, :mod:`gyrocomp._pair_count`) are cached on
+    disk after the first call.
 
     References
     ----------
@@ -241,23 +237,66 @@ def _sampen(a: int, b: int) -> float:
 def _count_matches(x: np.ndarray, dim: int, n_templates: int, r: float) -> int:
     """Unordered pairs of the first `n_templates` templates of length `dim` closer than `r`.
 
-    Chebyshev distance, strict ``<``. Coordinate 0 is handled by a sort and
-    ``searchsorted``; the others by cells of width r/g: two templates fewer
-    than g cells apart match in that coordinate, exactly g apart they are
-    checked, and more than g apart they cannot match. Coordinates beyond
-    what an int64 cell key can hold are checked for every candidate.
+    Chebyshev distance, strict ``<``: counted without enumerating the pairs
+    up to :data:`_COUNTED_DIMS` (:func:`_count_sorted`), by the grid search
+    beyond (:func:`_count_grid`).
     """
     if dim == 0:
         return n_templates * (n_templates - 1) // 2
+    if dim <= _COUNTED_DIMS:
+        return _count_sorted(x, dim, n_templates, r)
+    return _count_grid(x, dim, n_templates, r)
+
+
+def _count_sorted(x: np.ndarray, dim: int, n_templates: int, r: float) -> int:
+    """Pair count for `dim` in 1..3 by the compiled sweeps of :mod:`gyrocomp._pair_count`.
+
+    Templates are sorted by their first value; each further coordinate is
+    replaced by its rank and the rank window of values strictly closer than
+    `r`, so that the kernels work on integers and decide every tie as
+    ``abs(u - v) < r`` does in floating point.
+    """
+    from gyrocomp import _pair_count
+
+    order = np.argsort(x[:n_templates])
+    a_lo, a_hi = _pair_count.window_bounds(x[:n_templates][order], r)
+    if dim == 1:
+        return int(_pair_count.count_1d(a_hi))
+    windows = [_rank_window(x[k : k + n_templates], r, order) for k in range(1, dim)]
+    if dim == 2:
+        return int(_pair_count.count_2d(a_hi, *windows[0]))
+    return int(_pair_count.count_3d(a_lo, a_hi, *windows[0], *windows[1]))
+
+
+def _rank_window(v: np.ndarray, r: float, order: np.ndarray):
+    """Rank of each value of `v` and the rank window [lo, hi) of values within `r`, in `order`."""
+    from gyrocomp._pair_count import window_bounds
+
+    by_value = np.argsort(v)
+    rank = np.empty(v.size, dtype=np.int64)
+    rank[by_value] = np.arange(v.size)
+    lo, hi = window_bounds(v[by_value], r)
+    rank = rank[order]
+    return rank, lo[rank], hi[rank]
+
+
+def _count_grid(x: np.ndarray, dim: int, n_templates: int, r: float) -> int:
+    """Pair count by a grid of cells of width `r` over coordinates 1.. (any `dim`).
+
+    Coordinate 0 is handled by a sort and ``searchsorted``; the others by
+    cells: two templates in the same cell match in that coordinate,
+    neighbouring cells are checked, and cells further apart cannot match.
+    Coordinates beyond what an int64 cell key can hold are checked for
+    every candidate. The checked pairs make it quadratic in the number of
+    near pairs: slow on smooth signals.
+    """
     first = x[:n_templates]
     others = [x[k : k + n_templates] for k in range(1, dim)]
-    g0, power = _SUBCELLS.get(dim, (1, 0.0))
-    g = max(1, round(g0 * (n_templates / 1e5) ** power))
     gridded, extra, cell_id, spans = [], [], np.zeros(n_templates, dtype=np.int64), []
     for c in others:
-        cell = np.floor(c * (g / r)).astype(np.int64)
-        low = int(cell.min()) - g
-        span = int(cell.max()) - low + g + 1  # g free cells on each side: +-g never wraps
+        cell = np.floor(c / r).astype(np.int64)
+        low = int(cell.min()) - 1
+        span = int(cell.max()) - low + 2  # a free cell on each side: +-1 never wraps
         if math.prod(spans) * span * n_templates >= 2**62:
             extra.append(c)
             continue
@@ -280,11 +319,12 @@ def _count_matches(x: np.ndarray, dim: int, n_templates: int, r: float) -> int:
     hi_rank = np.searchsorted(values, first_sorted + r, side="left")  # x_j < x_i + r
     strides = [math.prod(spans[k + 1 :]) for k in range(len(spans))]
     total = 0
-    for offset in _half_offsets(len(spans), g):
+    for offset in _half_offsets(len(spans)):
         target = cell_sorted + sum(step * stride for step, stride in zip(offset, strides))
         start = np.searchsorted(key, target * n_templates + lo_rank, side="left")
         stop = np.searchsorted(key, target * n_templates + hi_rank, side="left")
-        checked = [c for c, step in zip(gridded, offset) if abs(step) == g] + extra
+        # every coordinate is checked: floor(c / r) rounds, so one cell is not proof of a match
+        checked = gridded + extra
         found = _check_pairs(start, stop - start, checked, r) if checked else int((stop - start).sum())
         # in its own cell every pair is found twice, and each template with itself
         total += found if any(offset) else (found - n_templates) // 2
@@ -317,9 +357,9 @@ def _check_pairs(start, counts, coords, r) -> int:
     return total
 
 
-def _half_offsets(n: int, g: int):
-    """The zero offset and every offset in {-g..g}^n whose first non-zero step is positive."""
-    for offset in itertools.product(range(-g, g + 1), repeat=n):
+def _half_offsets(n: int):
+    """The zero offset and every offset in {-1, 0, 1}^n whose first non-zero step is positive."""
+    for offset in itertools.product(range(-1, 2), repeat=n):
         nonzero = [step for step in offset if step]
         if not nonzero or nonzero[0] > 0:
             yield offset

@@ -76,7 +76,7 @@ def test_entropyhub_gaussian_published(real_data):
 @pytest.mark.parametrize("m", [0, 1, 2, 3, 4])
 @pytest.mark.parametrize("quantised", [False, True])
 def test_sample_entropy_matches_brute_force(m, quantised):
-    """The cell search against the O(N^2) sampenc count, also with ties at distance r."""
+    """Against the O(N^2) sampenc count, also with ties at distance r."""
     rng = np.random.default_rng(m)
     x = np.cumsum(rng.standard_normal(1500)) * 0.1 + rng.standard_normal(1500)
     r = 0.2 * np.std(x)
@@ -86,16 +86,31 @@ def test_sample_entropy_matches_brute_force(m, quantised):
     assert_allclose(sample_entropy(x, m, r), _sampen_brute(x, m, r), rtol=1e-12)
 
 
-@pytest.mark.parametrize("subcells", [(3, 0.0), (8, 0.0)])
-def test_sample_entropy_fine_cells_match_brute_force(monkeypatch, subcells):
-    """Cells finer than r (used on long signals) count the same pairs."""
-    import gyrocomp.entropy as entropy
+@pytest.mark.parametrize("m", [0, 1, 2])
+@pytest.mark.parametrize("kind", ["sine", "random walk"])
+def test_smooth_signal_matches_brute_force(m, kind):
+    """Smooth signals (nearly every template pair matches) against the O(N^2) count."""
+    rng = np.random.default_rng(21)
+    t = np.arange(1500)
+    if kind == "sine":
+        x = np.sin(2 * np.pi * t / 400) + 0.01 * rng.standard_normal(t.size)
+    else:
+        x = np.cumsum(rng.standard_normal(t.size))
+    r = 0.2 * np.std(x)
+    assert_allclose(sample_entropy(x, m, r), _sampen_brute(x, m, r), rtol=1e-12)
 
-    monkeypatch.setattr(entropy, "_SUBCELLS", {2: subcells, 3: subcells, 4: subcells})
-    rng = np.random.default_rng(9)
-    x = np.round(rng.standard_normal(1200) * 8) / 8  # ties at distance r = 0.25
-    for m in (1, 2, 3):
-        assert_allclose(sample_entropy(x, m, 0.25), _sampen_brute(x, m, 0.25), rtol=1e-12)
+
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_compiled_counts_equal_grid_counts(dim):
+    """The compiled sweeps (lengths 1-3) and the grid search (any length) count the same pairs."""
+    from gyrocomp.entropy import _count_grid, _count_sorted
+
+    rng = np.random.default_rng(dim)
+    quantised = np.round(rng.standard_normal(4000) * 8) / 8  # ties at distance r = 0.25
+    smooth = np.cumsum(rng.standard_normal(4000))
+    for x, r in ((quantised, 0.25), (smooth, 0.2 * np.std(smooth))):
+        n = x.size - 2
+        assert _count_sorted(x, dim, n, r) == _count_grid(x, dim, n, r)
 
 
 def test_sample_entropy_white_noise_theory():
