@@ -10,15 +10,28 @@ the entropy never applies one paper's thresholds to the other's measure.
 from __future__ import annotations
 
 import dataclasses
+import os
 from typing import Sequence
 
 import numpy as np
 
 from gyrocomp.errors import InputError
 
-__all__ = ["ENTROPIES", "PermutationSettings", "SampleSettings", "ClassifySettings", "classify", "class_of", "entropy_of"]
+__all__ = [
+    "ENTROPIES",
+    "CLASSES_SCHEMA",
+    "PermutationSettings",
+    "SampleSettings",
+    "ClassifySettings",
+    "classify",
+    "class_of",
+    "entropy_of",
+    "write_classes",
+    "plot_entropies",
+]
 
 ENTROPIES = ("permutation", "sample")
+CLASSES_SCHEMA = "gyrocomp.classes"
 
 
 def _check_thresholds(kind: str, noise_above: float, drift_below: float) -> None:
@@ -151,3 +164,94 @@ def class_of(value: float, settings: ClassifySettings = ClassifySettings()) -> s
     if value < settings.drift_below:
         return "drift"
     return "mixed"
+
+
+def write_classes(
+    components: str | os.PathLike,
+    settings: ClassifySettings,
+    out: str | os.PathLike,
+    *,
+    plot: str | os.PathLike | None = None,
+) -> list[dict]:
+    """Read ``components.parquet``, classify its components and write ``classes.json``.
+
+    The sequence ``gyrocomp classify`` and the parallel pipelines
+    (:func:`gyrocomp.pipeline.run.decompose_and_classify`) share.
+
+    Parameters
+    ----------
+    components : path-like
+        ``components.parquet`` (schema ``gyrocomp.components``) whose header
+        lists the component columns.
+    settings : ClassifySettings
+    out : path-like
+        ``classes.json`` to write (``-``: stdout): the header (input: the
+        components file's name and SHA-256), ``entropy`` (kind and its
+        settings), ``thresholds`` and ``components`` (:func:`classify`).
+    plot : path-like or None
+        PNG of :func:`plot_entropies` to write as well.
+
+    Returns
+    -------
+    list of dict
+        The entries of :func:`classify`.
+
+    Raises
+    ------
+    InputError
+        The header lists no components, or a listed column is missing.
+    """
+    import hashlib
+    from pathlib import Path
+
+    from gyrocomp import io
+    from gyrocomp.config import settings_dict
+
+    frame, header = io.read_table(components, "gyrocomp.components")
+    names = header.get("components")
+    if not isinstance(names, list) or not names:
+        raise InputError(f"{components}: header lists no `components`")
+    missing = [n for n in names if n not in frame.columns]
+    if missing:
+        raise InputError(f"{components}: component column {missing[0]!r} listed in the header is missing")
+    entries = classify(frame[names].to_numpy(dtype=float).T, names, settings)
+    sha = hashlib.sha256(Path(components).read_bytes()).hexdigest()
+    result = io.artefact_header(CLASSES_SCHEMA, inputs=[{"name": Path(components).name, "sha256": sha}], settings=settings_dict(settings))
+    result["entropy"] = {"kind": settings.entropy, **dataclasses.asdict(settings.active)}
+    result["thresholds"] = {"noise_above": settings.noise_above, "drift_below": settings.drift_below}
+    result["components"] = entries
+    io.write_json(out, result)
+    if plot is not None:
+        plot_entropies(entries, settings, plot)
+    return entries
+
+
+def plot_entropies(entries: Sequence[dict], settings: ClassifySettings, path: str | os.PathLike) -> None:
+    """Bar chart of the entropy per component, coloured by class, with the thresholds (the papers' Fig. 10).
+
+    An infinite sample entropy is drawn at the top of the axis. Written
+    atomically as PNG.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from gyrocomp import io
+
+    colours = {"noise": "tab:red", "mixed": "tab:orange", "drift": "tab:blue"}
+    values = np.array([e["entropy"] for e in entries], dtype=float)
+    finite = values[np.isfinite(values)]
+    cap = 1.1 * max(float(finite.max()) if finite.size else 0.0, settings.noise_above)
+    shown = np.where(np.isfinite(values), values, cap)
+    fig, ax = plt.subplots(figsize=(max(5.0, 0.6 * len(entries) + 2), 3.5), constrained_layout=True)
+    ax.bar([e["name"] for e in entries], shown, color=[colours[e["class"]] for e in entries])
+    ax.axhline(settings.noise_above, color="k", linestyle="--", linewidth=1, label=f"noise above {settings.noise_above:g}")
+    ax.axhline(settings.drift_below, color="k", linestyle=":", linewidth=1, label=f"drift below {settings.drift_below:g}")
+    ax.set_ylabel("permutation entropy (normalised)" if settings.entropy == "permutation" else "sample entropy [nats]")
+    ax.set_xlabel("component")
+    ax.tick_params(axis="x", labelrotation=45)
+    ax.legend(loc="upper right", fontsize="small")
+    with io.atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=120, metadata={"Software": None})
+    plt.close(fig)

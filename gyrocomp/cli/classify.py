@@ -37,13 +37,8 @@ def classify(
     settings and thresholds used.
     """
     with report_errors(ctx):
-        import dataclasses
-        import hashlib
-
         from gyrocomp import config as cfg
-        from gyrocomp import io
-        from gyrocomp.classify import ClassifySettings, classify as run_classify
-        from gyrocomp.errors import InputError
+        from gyrocomp.classify import ClassifySettings, write_classes
 
         table, source = {}, "defaults [classify]"
         if config is not None or assignments:
@@ -53,26 +48,7 @@ def classify(
         settings = cfg.bind(ClassifySettings, table, source)
         if entropy is not None:
             settings = cfg.bind(ClassifySettings, {**table, "entropy": entropy}, f"--entropy {entropy}")
-        frame, header = io.read_table(components, "gyrocomp.components")
-        names = header.get("components")
-        if not isinstance(names, list) or not names:
-            raise InputError(f"{components}: header lists no `components`")
-        missing = [n for n in names if n not in frame.columns]
-        if missing:
-            raise InputError(f"{components}: component column {missing[0]!r} listed in the header is missing")
-        entries = run_classify(frame[names].to_numpy(dtype=float).T, names, settings)
-        sha = hashlib.sha256(Path(components).read_bytes()).hexdigest()
-        result = io.artefact_header(
-            "gyrocomp.classes",
-            inputs=[{"name": Path(components).name, "sha256": sha}],
-            settings=cfg.settings_dict(settings),
-        )
-        result["entropy"] = {"kind": settings.entropy, **dataclasses.asdict(settings.active)}
-        result["thresholds"] = {"noise_above": settings.noise_above, "drift_below": settings.drift_below}
-        result["components"] = entries
-        io.write_json(out, result)
-        if plot is not None:
-            _plot(plot, entries, settings)
+        entries = write_classes(components, settings, out, plot=plot)
     _print_table(console_for(ctx, out), entries, settings)
 
 
@@ -91,29 +67,3 @@ def _print_table(console, entries, settings) -> None:
         table.add_row(e["name"], f"{e['entropy']:.4f}", e["class"])
     console.print(table)
 
-
-def _plot(path: Path, entries, settings) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    from gyrocomp import io
-
-    colours = {"noise": "tab:red", "mixed": "tab:orange", "drift": "tab:blue"}
-    values = np.array([e["entropy"] for e in entries], dtype=float)
-    finite = values[np.isfinite(values)]
-    cap = 1.1 * max(float(finite.max()) if finite.size else 0.0, settings.noise_above)
-    shown = np.where(np.isfinite(values), values, cap)  # an infinite SampEn drawn at the top
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.6 * len(entries) + 2), 3.5), constrained_layout=True)
-    ax.bar([e["name"] for e in entries], shown, color=[colours[e["class"]] for e in entries])
-    ax.axhline(settings.noise_above, color="k", linestyle="--", linewidth=1, label=f"noise above {settings.noise_above:g}")
-    ax.axhline(settings.drift_below, color="k", linestyle=":", linewidth=1, label=f"drift below {settings.drift_below:g}")
-    ax.set_ylabel("permutation entropy (normalised)" if settings.entropy == "permutation" else "sample entropy [nats]")
-    ax.set_xlabel("component")
-    ax.tick_params(axis="x", labelrotation=45)
-    ax.legend(loc="upper right", fontsize="small")
-    with io.atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=120, metadata={"Software": None})
-    plt.close(fig)

@@ -49,11 +49,8 @@ def decompose(
     mean frequency, orthogonality index; and the reconstruction error).
     """
     with report_errors(ctx):
-        import pandas as pd
-
-        from gyrocomp import config as cfg, io
-        from gyrocomp.decompose import SIDECAR_SCHEMA, DecomposeSettings, component_stats
-        from gyrocomp.decompose import decompose as run
+        from gyrocomp import config as cfg
+        from gyrocomp.decompose import DecomposeSettings, write_components
 
         table = {}
         source = "[decompose]"
@@ -67,30 +64,18 @@ def decompose(
             table["ensemble"] = ensemble
         settings = cfg.bind(DecomposeSettings, table, source)
         columns = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
-        rec = io.read_recording(recording, columns, min_samples=4, resample=resample)
-        with progress(ctx, f"{settings.method} {rec.name}") as callback:
-            result = run(rec.rate_dps, settings, seed=seed, workers=workers, callback=callback)
-        stats = component_stats(result, rec.fs_hz)
-        frame = pd.DataFrame({"time": rec.time_s, "rate": rec.rate_dps})
-        if rec.temperature_c is not None:
-            frame["temperature"] = rec.temperature_c
-        for name, values in zip(result.names, result.components):
-            frame[name] = values
-        resolved = cfg.settings_dict(settings)
-        header = io.artefact_header("gyrocomp.components", inputs=[rec.input_record()], settings=resolved, seed=seed)
-        header["components"] = list(result.names)
-        header["fs_hz"] = rec.fs_hz
-        sidecar = io.artefact_header(SIDECAR_SCHEMA, inputs=[rec.input_record()], settings=resolved, seed=seed)
-        sidecar.update(method=settings.method, fs_hz=rec.fs_hz, **stats)
-        io.write_table(out, frame, header)
-        io.write_json(out.with_suffix(".json"), sidecar)
-    _print_table(console_for(ctx), settings.method, rec.name, stats)
+        with progress(ctx, f"{settings.method} {recording.name}") as callback:
+            _, sidecar = write_components(
+                recording, settings, out, seed=seed, workers=workers, callback=callback, columns=columns, resample=resample
+            )
+    _print_table(console_for(ctx), sidecar)
 
 
-def _print_table(console, method, name, stats):
+def _print_table(console, stats):
     from rich.table import Table
 
-    table = Table(title=f"{method} of {Path(name).name}: reconstruction error {stats['reconstruction_error']:.2e}")
+    name = stats["inputs"][0]["name"]
+    table = Table(title=f"{stats['method']} of {name}: reconstruction error {stats['reconstruction_error']:.2e}")
     for head in ("component", "energy share", "mean freq [Hz]", "orthogonality"):
         table.add_column(head, justify="left" if head == "component" else "right")
     for c in stats["components"]:

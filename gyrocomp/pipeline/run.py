@@ -165,8 +165,9 @@ def run(
 def decompose_and_classify(recording: io.Recording, config: dict, source: str, folder: Path, *, seed: int, workers: int, callback=None) -> tuple[dict, dict]:
     """Decompose a recording and classify its components as ``gyrocomp decompose`` and ``classify`` do.
 
-    Writes ``components.parquet`` (+ the ``components.json`` sidecar) and
-    ``classes.json`` into `folder`.
+    Writes ``components.parquet`` (+ the ``components.json`` sidecar,
+    :func:`gyrocomp.decompose.write_components`) and ``classes.json``
+    (:func:`gyrocomp.classify.write_classes`) into `folder`.
 
     Returns
     -------
@@ -175,38 +176,17 @@ def decompose_and_classify(recording: io.Recording, config: dict, source: str, f
     paths : dict
         ``components`` and ``classes``.
     """
-    import pandas as pd
+    from gyrocomp.classify import ClassifySettings, write_classes
+    from gyrocomp.decompose import DecomposeSettings, write_components
 
-    from gyrocomp.classify import ClassifySettings, classify
-    from gyrocomp.decompose import SIDECAR_SCHEMA, DecomposeSettings, component_stats, decompose
-
-    times, paths = {}, {}
     settings = bind(DecomposeSettings, config.get("decompose"), f"{source} [decompose]")
-    t0 = time.perf_counter()
-    result = decompose(recording.rate_dps, settings, seed=seed, workers=workers, callback=callback)
-    times["decompose"] = time.perf_counter() - t0
-    frame = pd.DataFrame({"time": recording.time_s, "rate": recording.rate_dps, "temperature": recording.temperature_c})
-    for name, values in zip(result.names, result.components):
-        frame[name] = values
-    resolved = settings_dict(settings)
-    inputs = [recording.input_record()]
-    header = io.artefact_header("gyrocomp.components", inputs=inputs, settings=resolved, seed=seed)
-    header.update(components=list(result.names), fs_hz=recording.fs_hz)
-    sidecar = io.artefact_header(SIDECAR_SCHEMA, inputs=inputs, settings=resolved, seed=seed)
-    sidecar.update(method=settings.method, fs_hz=recording.fs_hz, **component_stats(result, recording.fs_hz))
-    paths["components"] = folder / "components.parquet"
-    io.write_table(paths["components"], frame, header)
-    io.write_json(paths["components"].with_suffix(".json"), sidecar)
-    t0 = time.perf_counter()
     classify_settings = bind(ClassifySettings, config.get("classify"), f"{source} [classify]")
-    entries = classify(result.components, result.names, classify_settings)
-    times["classify"] = time.perf_counter() - t0
-    classes = io.artefact_header(
-        "gyrocomp.classes", inputs=[file_record(paths["components"])], settings=settings_dict(classify_settings)
-    )
-    classes["components"] = entries
-    paths["classes"] = folder / "classes.json"
-    io.write_json(paths["classes"], classes)
+    paths = {"components": folder / "components.parquet", "classes": folder / "classes.json"}
+    t0 = time.perf_counter()
+    write_components(recording, settings, paths["components"], seed=seed, workers=workers, callback=callback)
+    t1 = time.perf_counter()
+    write_classes(paths["components"], classify_settings, paths["classes"])
+    times = {"decompose": t1 - t0, "classify": time.perf_counter() - t1}
     return times, paths
 
 

@@ -123,3 +123,21 @@ def test_compensate_cli_warns_out_of_range_on_stderr(make_recording, tmp_path, o
     result = runner.invoke(app, ["compensate", str(path), str(model), "--out", str(tmp_path / "c.parquet")])
     assert result.exit_code == 0
     assert "warning" in result.output and "degC above" in result.output
+
+
+def test_pipeline_writes_the_cli_artefacts_byte_for_byte(tmp_path, oven_files):
+    """`run`'s decompose and classify stage and the two commands share one writer per artefact."""
+    from gyrocomp.config import load_config
+    from gyrocomp.pipeline.run import decompose_and_classify
+
+    train_path, _ = oven_files
+    cli, pipe = tmp_path / "cli", tmp_path / "pipe"
+    cli.mkdir()
+    pipe.mkdir()
+    _invoke(["decompose", train_path, "--config", "pe-lcd-anfis", "--out", cli / "components.parquet"])
+    _invoke(["classify", cli / "components.parquet", "--config", "pe-lcd-anfis", "--out", cli / "classes.json"])
+    rec = io.read_recording(train_path, require_temperature=True)
+    _, paths = decompose_and_classify(rec, load_config("pe-lcd-anfis"), "pe-lcd-anfis", pipe, seed=0, workers=1)
+    for name in ("components.parquet", "components.json", "classes.json"):
+        assert (pipe / name).read_bytes() == (cli / name).read_bytes(), name
+    assert set(paths) == {"components", "classes"}
