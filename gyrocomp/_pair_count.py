@@ -68,15 +68,6 @@ def _fenwick_prefix(tree, i):
 
 
 @numba.njit(cache=True)
-def count_1d(a_hi):
-    """Pairs p < q (positions in the sort by a) with a_q - a_p < r."""
-    total = 0
-    for p in range(a_hi.size):
-        total += a_hi[p] - p - 1
-    return total
-
-
-@numba.njit(cache=True)
 def count_2d(a_hi, brank, blo, bhi):
     """Pairs matching in a and b: sweep over a with a window of width r, Fenwick tree over b ranks.
 
@@ -96,7 +87,7 @@ def count_2d(a_hi, brank, blo, bhi):
 
 
 @numba.njit(cache=True)
-def count_3d(a_lo, a_hi, brank, blo, bhi, crank, clo, chi):
+def count_3d(a_lo, a_hi, brank, blo, bhi, crank, clo, chi, by_b):
     """Pairs matching in a, b and c. O(n log^2 n) time, O(n) memory.
 
     The sort by a is cut into cells [s, a_hi[s]): inside one cell every
@@ -105,15 +96,17 @@ def count_3d(a_lo, a_hi, brank, blo, bhi, crank, clo, chi):
     over c). A pair across neighbouring cells P, Q matches in a when p >=
     a_lo[q]: with updates p in descending order and each query q placed
     after update a_lo[q], that is a 3-D dominance count, done offline by
-    divide and conquer over that event order (:func:`_cdq`).
+    divide and conquer over that event order (:func:`_cdq`). `by_b` lists
+    the templates cell by cell (cells in order), each cell sorted by b.
     """
     n = brank.size
     tree = np.zeros(n + 1, np.int32)
     bounds = np.empty((n, 4), np.int64)
-    bounds[:, 0] = blo
-    bounds[:, 1] = bhi
-    bounds[:, 2] = clo
-    bounds[:, 3] = chi
+    for p in range(n):  # the four windows of a query side by side: one cache line
+        bounds[p, 0] = blo[p]
+        bounds[p, 1] = bhi[p]
+        bounds[p, 2] = clo[p]
+        bounds[p, 3] = chi[p]
     events = np.empty(n, np.int64)  # two neighbouring cells hold at most n templates
     buffer = np.empty(n, np.int64)
     total = 0
@@ -121,8 +114,7 @@ def count_3d(a_lo, a_hi, brank, blo, bhi, crank, clo, chi):
     prev = -1
     while start < n:
         stop = a_hi[start]
-        total += _count_in_cell(brank[start:stop], blo[start:stop], crank[start:stop], clo[start:stop],
-                                chi[start:stop], tree)
+        total += _count_in_cell(by_b[start:stop], brank, blo, crank, clo, chi, tree)
         if prev >= 0:
             e = 0
             q = stop - 1
@@ -135,16 +127,15 @@ def count_3d(a_lo, a_hi, brank, blo, bhi, crank, clo, chi):
                     events[e] = (brank[q] << _SHIFT) | (q << 2) | 1
                     e += 1
                     q -= 1
-            total += _cdq(events[:e], buffer[:e], bounds, tree)
+            total += _cdq(events, buffer, e, bounds, tree)
         prev = start
         start = stop
     return total
 
 
 @numba.njit(cache=True)
-def _count_in_cell(brank, blo, crank, clo, chi, tree):
-    """Pairs of one a-cell matching in b and c: sweep in b order, Fenwick tree over c ranks."""
-    order = np.argsort(brank)
+def _count_in_cell(order, brank, blo, crank, clo, chi, tree):
+    """Pairs of one a-cell (templates `order`, sorted by b) matching in b and c: sweep, Fenwick tree over c ranks."""
     total = 0
     out = 0
     for k in range(order.size):
@@ -160,10 +151,10 @@ def _count_in_cell(brank, blo, crank, clo, chi, tree):
 
 
 @numba.njit(cache=True)
-def _cdq(events, buffer, bounds, tree):
+def _cdq(events, buffer, e, bounds, tree):
     """Sum over queries of the earlier updates in their (b, c) box: offline divide and conquer.
 
-    `events` are packed ``brank << 34 | payload << 2 | kind``: kind 0 an
+    The first `e` `events` are packed ``brank << 34 | payload << 2 | kind``: kind 0 an
     update (payload its c rank), kind 1 a query (payload its template, whose
     rank windows are in `bounds`). Bottom-up merge sort by b rank: blocks of
     :data:`_BASE` events are compared directly; at each wider level the
@@ -171,7 +162,6 @@ def _cdq(events, buffer, bounds, tree):
     over b (a sliding window of b ranks) with a Fenwick tree over c ranks,
     which is left empty again.
     """
-    e = events.size
     total = 0
     for s in range(0, e, _BASE):
         end = min(s + _BASE, e)
@@ -185,7 +175,13 @@ def _cdq(events, buffer, bounds, tree):
                         c = (u >> 2) & _PAYLOAD
                         if bounds[t, 0] <= b < bounds[t, 1] and bounds[t, 2] <= c < bounds[t, 3]:
                             total += 1
-        events[s:end].sort()
+        for k in range(s + 1, end):  # insertion sort of the block
+            u = events[k]
+            j = k
+            while j > s and events[j - 1] > u:
+                events[j] = events[j - 1]
+                j -= 1
+            events[j] = u
     w = _BASE
     while w < e:
         for s in range(0, e - w, 2 * w):
@@ -220,9 +216,10 @@ def _cdq(events, buffer, bounds, tree):
                     buffer[o] = events[i]
                     i += 1
                 o += 1
-            buffer[o : o + mid - i] = events[i:mid]
-            o += mid - i
-            buffer[o : o + end - j] = events[j:end]
-            events[s:end] = buffer[s:end]
+            for k in range(i, mid):
+                buffer[o] = events[k]
+                o += 1
+            for k in range(s, o):  # the right half's tail is already in place
+                events[k] = buffer[k]
         w *= 2
     return total

@@ -260,12 +260,18 @@ def _count_sorted(x: np.ndarray, dim: int, n_templates: int, r: float) -> int:
 
     order = np.argsort(x[:n_templates])
     a_lo, a_hi = _pair_count.window_bounds(x[:n_templates][order], r)
-    if dim == 1:
-        return int(_pair_count.count_1d(a_hi))
+    if dim == 1:  # the templates after p in the sort and before a_hi[p]
+        return int(np.sum(a_hi - np.arange(1, n_templates + 1)))
     windows = [_rank_window(x[k : k + n_templates], r, order) for k in range(1, dim)]
     if dim == 2:
         return int(_pair_count.count_2d(a_hi, *windows[0]))
-    return int(_pair_count.count_3d(a_lo, a_hi, *windows[0], *windows[1]))
+    # cells [s, a_hi[s]) of the sort by a, each listed in the order of b
+    starts = [0]
+    while starts[-1] < n_templates:
+        starts.append(int(a_hi[starts[-1]]))
+    cell = np.repeat(np.arange(len(starts) - 1), np.diff(starts))
+    by_b = np.lexsort((windows[0][0], cell))
+    return int(_pair_count.count_3d(a_lo, a_hi, *windows[0], *windows[1], by_b))
 
 
 def _rank_window(v: np.ndarray, r: float, order: np.ndarray):
