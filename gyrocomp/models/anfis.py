@@ -15,6 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 from scipy.special import expit
 
 from gyrocomp.errors import InputError
@@ -72,6 +73,14 @@ class ANFIS(Learner):
     validation_fraction : float, default=0.0
         Share of the samples held out as contiguous blocks (see Notes) to
         compute a validation RMSE each epoch. 0 disables validation.
+    ridge : float, default=0.0
+        Tikhonov weight lambda of the consequent step (dimensionless): the
+        least squares of [2] eq. (28) become
+        min (1/n) ||A theta - (y - mean y)||^2 + lambda ||theta||^2, so a
+        rule that hardly fires in training keeps consequents near zero
+        (its output near the mean target) instead of whatever the least
+        squares needs from a column of near-zeros. 0 is Jang's exact
+        least-squares estimate.
     seed : int or None, default=None
         Seeds the choice of validation blocks; ANFIS has no other random
         step (the premises start on an even grid).
@@ -111,9 +120,15 @@ class ANFIS(Learner):
     (a single MF sits mid-range with half-range width), gbell slope b = 2.
 
     The consequents are solved by ``numpy.linalg.lstsq`` on the
-    (n_samples x n_rules * (n_features + 1)) design matrix of [2] eq. (28),
+    (n_samples x n_rules * (n_features + 1)) design matrix A of [2] eq. (28),
     the one dense matrix of that size; Jang's sequential LSE gives the same
-    solution. The firing strengths are normalised in the log domain, and
+    solution. With ``ridge > 0`` they solve the regularised normal equations
+    (A^T A + n lambda I) theta = A^T (y - mean y) by Cholesky (A^T A is
+    parameters x parameters), then add mean y to every rule's constant:
+    the normalised strengths sum to 1, so the model output shifts by
+    mean y, and the penalty, like scikit-learn's ``Ridge``, leaves the
+    overall level of y free. The n in n lambda makes lambda independent of
+    the number of samples. The firing strengths are normalised in the log domain, and
     the analytic gradient uses d E / d log mu, so memberships that
     underflow far outside the training range stay finite.
 
@@ -158,6 +173,7 @@ class ANFIS(Learner):
         step_increase=1.1,
         step_decrease=0.9,
         validation_fraction=0.0,
+        ridge=0.0,
         seed=None,
     ):
         self.n_mfs = n_mfs
@@ -167,6 +183,7 @@ class ANFIS(Learner):
         self.step_increase = step_increase
         self.step_decrease = step_decrease
         self.validation_fraction = validation_fraction
+        self.ridge = ridge
         self.seed = seed
 
     @property
@@ -209,8 +226,7 @@ class ANFIS(Learner):
             log_mu = [_log_mu(p, Z[:, j], self.mf) for j, p in enumerate(premises)]
             wbar = _normalised_firing(log_mu)
             design = (wbar[:, :, None] * Za[:, None, :]).reshape(len(Z), -1)
-            theta = np.linalg.lstsq(design, y, rcond=None)[0]
-            consequents = theta.reshape(wbar.shape[1], -1)
+            consequents = _consequents(design, y, wbar.shape[1], self.ridge)
             rule_out = Za @ consequents.T
             f = np.einsum("nr,nr->n", wbar, rule_out)
             train_hist.append(rmse(f, y))
@@ -261,6 +277,7 @@ class ANFIS(Learner):
         check_float(owner, "step_increase", self.step_increase, 1.0)
         check_float(owner, "step_decrease", self.step_decrease, 0.0, 1.0, low_open=True)
         check_float(owner, "validation_fraction", self.validation_fraction, 0.0, 0.5)
+        check_float(owner, "ridge", self.ridge, 0.0)
         check_seed(owner, self.seed)
         return n_mfs
 
@@ -279,6 +296,22 @@ def _initial_premises(m: int, mf: str) -> np.ndarray:
         return np.column_stack([np.full(m, half), np.full(m, 2.0), centres])
     sigma = half / np.sqrt(2.0 * np.log(2.0))
     return np.column_stack([centres, np.full(m, sigma)])
+
+
+def _consequents(design: np.ndarray, y: np.ndarray, n_rules: int, ridge: float) -> np.ndarray:
+    """Consequents by least squares ([2] eq. (28)), with the Tikhonov term of :class:`ANFIS` when `ridge` > 0.
+
+    Returns shape (n_rules, n_features + 1); the design matrix has the
+    columns wbar_r * (z, 1) rule after rule.
+    """
+    if ridge == 0:
+        return np.linalg.lstsq(design, y, rcond=None)[0].reshape(n_rules, -1)
+    level = float(np.mean(y))
+    gram = design.T @ design
+    gram[np.diag_indices_from(gram)] += len(y) * ridge
+    theta = scipy.linalg.solve(gram, design.T @ (y - level), assume_a="pos").reshape(n_rules, -1)
+    theta[:, -1] += level
+    return theta
 
 
 def _log_mu(p: np.ndarray, x: np.ndarray, mf: str) -> np.ndarray:

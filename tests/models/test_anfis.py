@@ -141,3 +141,71 @@ def test_predict_far_outside_training_range_is_finite():
 def test_n_mfs_length_must_match_columns():
     with pytest.raises(ValueError, match="n_mfs"):
         ANFIS(n_mfs=(2, 2, 2)).fit(np.zeros((10, 2)) + np.arange(10)[:, None], np.arange(10.0))
+
+
+def _cooling_band(n=600, seed=0):
+    """Inputs on a band (rate rises with temperature): the (cold, heating) corner never fires in training."""
+    rng = np.random.default_rng(seed)
+    t = rng.uniform(0, 1, n)
+    rate = 0.2 * t + rng.normal(0, 0.02, n)
+    X = np.column_stack([t, rate])
+    y = np.sin(3 * t) + 0.5 * rate + rng.normal(0, 0.01, n)
+    return X, y
+
+
+def _design(model, X):
+    """Normalised strengths and design matrix of eq. (28) with the premises at their start."""
+    Z = (X - model.input_offset_) / model.input_scale_
+    init = [anfis_module._initial_premises(len(p), model.mf) for p in model.premises_]
+    wbar = anfis_module._normalised_firing([anfis_module._log_mu(p, Z[:, j], model.mf) for j, p in enumerate(init)])
+    Za = np.column_stack([Z, np.ones(len(Z))])
+    return wbar, (wbar[:, :, None] * Za[:, None, :]).reshape(len(Z), -1)
+
+
+def test_ridge_zero_is_jangs_least_squares():
+    """One epoch (premises at their start): ridge = 0 is exactly numpy's lstsq on the design of eq. (28)."""
+    X, y = _cooling_band()
+    model = ANFIS(n_mfs=2, epochs=1, ridge=0.0).fit(X, y)
+    _, design = _design(model, X)
+    assert np.array_equal(model.consequents_, np.linalg.lstsq(design, y, rcond=None)[0].reshape(4, 3))
+    tiny = ANFIS(n_mfs=2, epochs=1, ridge=1e-12).fit(X, y)
+    assert_allclose(tiny.predict(X), model.predict(X), atol=1e-6)
+
+
+def test_ridge_equals_augmented_least_squares():
+    """The normal equations agree with the augmented system [A; sqrt(n lambda) I] theta = [y - mean y; 0]."""
+    X, y = _cooling_band()
+    lam = 1e-3
+    model = ANFIS(n_mfs=2, epochs=1, ridge=lam).fit(X, y)
+    _, design = _design(model, X)
+    p = design.shape[1]
+    A = np.vstack([design, np.sqrt(len(y) * lam) * np.eye(p)])
+    theta = np.linalg.lstsq(A, np.concatenate([y - y.mean(), np.zeros(p)]), rcond=None)[0].reshape(4, 3)
+    theta[:, -1] += y.mean()
+    assert_allclose(model.consequents_, theta, rtol=1e-8, atol=1e-10)
+
+
+def test_ridge_shrinks_the_consequents_of_a_barely_firing_rule():
+    """3 x 3 rules on a band of inputs: rule (cold, heating) carries 0.5 % of the strength.
+
+    Plain least squares gives it consequents of norm ~100 and predicts -40 at
+    that corner for a target in [-0.1, 1.1]; a small ridge pulls its output
+    to the mean target at almost no cost in training error.
+    """
+    X, y = _cooling_band()
+    plain = ANFIS(n_mfs=3, epochs=1).fit(X, y)
+    ridged = ANFIS(n_mfs=3, epochs=1, ridge=1e-6).fit(X, y)
+    wbar, _ = _design(plain, X)
+    share = wbar.mean(axis=0)
+    rare = int(np.argmin(share))
+    assert rare == 2 and share[rare] < 0.01  # input 0 MF 0 (cold), input 1 MF 2 (heating)
+    assert np.linalg.norm(ridged.consequents_[rare]) < 0.02 * np.linalg.norm(plain.consequents_[rare])
+    corner = np.array([[X[:, 0].min(), X[:, 1].max()]])
+    assert abs(plain.predict(corner)[0]) > 10
+    assert abs(ridged.predict(corner)[0] - y.mean()) < 0.5
+    assert ridged.train_rmse_[0] < 1.1 * plain.train_rmse_[0]
+
+
+def test_ridge_must_be_non_negative():
+    with pytest.raises(ValueError, match="ridge"):
+        ANFIS(ridge=-1.0).fit(*_cooling_band(50))

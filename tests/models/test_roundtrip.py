@@ -26,6 +26,7 @@ Y = 0.01 * (T - 25) + 2e-4 * (T - 25) ** 2 + 1.5 * RATE + rng.normal(0, 0.01, 30
 CASES = [
     (ANFIS(n_mfs=(4, 3), epochs=5, validation_fraction=0.2, seed=1), X_NORM),
     (ANFIS(n_mfs=2, mf="gauss", epochs=5), X_PHYS),
+    (ANFIS(n_mfs=3, epochs=5, ridge=1e-3), X_PHYS),
     (ELM(n_hidden=12, activation="radbas", weight_scale=0.5, seed=2), X_NORM),
     (ELM(n_hidden=7, ridge=0.1, seed=3), X_NORM),
     (NSGA2ELM(pop_size=6, n_gen=2, seed=4), X_NORM),
