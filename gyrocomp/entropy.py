@@ -35,6 +35,9 @@ _PAIR_CHUNK = 1 << 20
 _COUNTED_DIMS = 3
 """Longest template counted by the compiled sweeps; longer ones use the grid search."""
 
+_COUNTED_MAX = 1 << 29
+"""Templates the compiled sweeps take (their packed events hold a rank in 29 bits)."""
+
 
 def permutation_entropy(x, order=3, delay=1, normalize=True):
     """Permutation entropy of a 1-D signal (Bandt & Pompe).
@@ -239,11 +242,11 @@ def _count_matches(x: np.ndarray, dim: int, n_templates: int, r: float) -> int:
 
     Chebyshev distance, strict ``<``: counted without enumerating the pairs
     up to :data:`_COUNTED_DIMS` (:func:`_count_sorted`), by the grid search
-    beyond (:func:`_count_grid`).
+    beyond, or past :data:`_COUNTED_MAX` templates (:func:`_count_grid`).
     """
     if dim == 0:
         return n_templates * (n_templates - 1) // 2
-    if dim <= _COUNTED_DIMS:
+    if dim <= _COUNTED_DIMS and n_templates < _COUNTED_MAX:
         return _count_sorted(x, dim, n_templates, r)
     return _count_grid(x, dim, n_templates, r)
 
