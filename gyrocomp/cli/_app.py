@@ -29,6 +29,10 @@ app = typer.Typer(
 )
 
 
+_LOG_WIDTH = 160
+"""Table width when output goes to a file or pipe rather than a terminal."""
+
+
 @dataclasses.dataclass
 class State:
     """Global options, passed to commands through the Typer context."""
@@ -65,7 +69,10 @@ def console_for(ctx: typer.Context, out: Path | str | None = None) -> Console:
     """Where tables and progress go: stderr when stdout carries data (``--out -``)."""
     st = state(ctx)
     to_stderr = str(out) == "-"
-    return Console(stderr=to_stderr, quiet=st.quiet, soft_wrap=False)
+    console = Console(stderr=to_stderr, quiet=st.quiet, soft_wrap=False)
+    if not console.is_terminal:
+        console.width = _LOG_WIDTH  # a log file or pipe: do not squeeze tables to 80 columns
+    return console
 
 
 @contextlib.contextmanager
