@@ -15,6 +15,13 @@ measured temperature, white noise) on a fit recording, then
 3. **where** -- breaks the residual down by regime, timescale and EMD
    component (:mod:`gyrocomp.diagnose.localize`).
 
+The gap and the localization compare each residual with the model's noise
+terms, whose white level is the fit run's sample-level one
+(:func:`gyrocomp.diagnose.select.sample_arw`): the likelihood's white term,
+fitted on block means, also absorbs whatever drift a model leaves out (the
+baseline's then reads a quarter of the real Allan deviation at short tau),
+which would hide that drift from the gap.
+
 A recording without temperature (a static run) is diagnosed on its
 stochastic part and time effects only; the temperature effects are listed
 as skipped with the reason.
@@ -31,7 +38,7 @@ from gyrocomp.config import bind, load_config, settings_dict
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
 from gyrocomp.diagnose.effects import EFFECTS, NEEDS_TEMPERATURE, Run, TemperatureScale, effect_params
-from gyrocomp.diagnose.select import Fitted, Problem, greedy, holdout_fit, residual_of
+from gyrocomp.diagnose.select import Fitted, Problem, greedy, holdout_fit, residual_of, sample_arw
 from gyrocomp.errors import InputError
 
 __all__ = ["DiagnoseSettings", "get_config", "diagnose", "SCHEMA", "EFFECTS"]
@@ -140,17 +147,18 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
         start = _start_model(fit_p, start_effects)
         selected, first_step, steps, baseline = greedy(fit_p, hold_p, candidates, callback=callback, start=start)
         models = {"baseline": baseline, "selected": selected}
-        gaps = {name: _gaps(fit_p, hold_p, m) for name, m in models.items()}
+        white = sample_arw(fit_p.run)
+        gaps = {name: _gaps(fit_p, hold_p, m, white) for name, m in models.items()}
         cand = {}
         for effect, model in first_step.items():
-            g = _gaps(fit_p, hold_p, model)
+            g = _gaps(fit_p, hold_p, model, white)
             cand[effect] = {
                 "params": effect_params(effect, model.spec, model.beta, model.names, model.noise),
                 "gap_fit": g["fit"]["total"],
                 "gap_holdout": g["holdout"]["total"] if hold_p is not None else None,
                 "delta_bic": model.bic - start.bic,
             }
-        local = _localization(fit_p, hold_p, models, gaps, s)
+        local = _localization(fit_p, hold_p, models, gaps, s, white)
     order = [e for e in selected.order if e not in start_effects]
     return {
         "selected_effects": order,
@@ -197,20 +205,26 @@ def _start_model(problem: Problem, start_effects) -> Fitted:
     return model
 
 
-def _gaps(fit_p, hold_p, model):
+def _gap_noise(model: Fitted, white: float):
+    """The model's noise terms with the sample-level white level `white` [deg/s/sqrt(Hz)]."""
+    return dataclasses.replace(model.noise, arw=white)
+
+
+def _gaps(fit_p, hold_p, model, white):
     s = fit_p.settings
+    noise = _gap_noise(model, white)
     r_fit = residual_of(fit_p, model)
-    out = {"fit": _gap.gap(r_fit, fit_p.run.fs_hz, model.noise, len(model.names), s.gap_block_s, s.gap_min_windows)}
+    out = {"fit": _gap.gap(r_fit, fit_p.run.fs_hz, noise, len(model.names), s.gap_block_s, s.gap_min_windows)}
     out["fit"]["residual"] = r_fit
     out["holdout"] = None
     if hold_p is not None:
         _, r_hold, n_free = holdout_fit(hold_p, model)
-        out["holdout"] = _gap.gap(r_hold, hold_p.run.fs_hz, model.noise, n_free, s.gap_block_s, s.gap_min_windows)
+        out["holdout"] = _gap.gap(r_hold, hold_p.run.fs_hz, noise, n_free, s.gap_block_s, s.gap_min_windows)
         out["holdout"]["residual"] = r_hold
     return out
 
 
-def _localization(fit_p, hold_p, models, gaps, s):
+def _localization(fit_p, hold_p, models, gaps, s, white):
     out = {}
     for run_name, problem in (("fit", fit_p), ("holdout", hold_p)):
         if problem is None:
@@ -220,9 +234,10 @@ def _localization(fit_p, hold_p, models, gaps, s):
         for name, model in models.items():
             g = gaps[name][run_name]
             r = g["residual"]
+            noise = _gap_noise(model, white)
             per_model[name] = {
-                "regime": localize.regimes(run.time_s, run.temperature_c, r, run.fs_hz, model.noise, s),
-                "timescale": localize.timescales(r, run.fs_hz, model.noise, g["timescale"]),
+                "regime": localize.regimes(run.time_s, run.temperature_c, r, run.fs_hz, noise, s),
+                "timescale": localize.timescales(r, run.fs_hz, noise, g["timescale"]),
                 "component": localize.components(r, run.fs_hz, s),
             }
         out[run_name] = per_model

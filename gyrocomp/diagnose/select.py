@@ -12,11 +12,23 @@ with the lowest
 .. math:: \\mathrm{BIC} = -2 \\log L + k \\ln n_\\mathrm{blocks}
 
 is kept when it lowers the BIC by more than `bic_margin` **and**, with a
-holdout recording, its fitted parameters (offset and periodic phase
-re-estimated on the holdout, everything else frozen) lower the holdout's
-``-2 log L`` by more than `holdout_margin`. Otherwise the next best effect is
-tried; the selection stops when none passes. With no effect kept the report
-names none: the baseline explains the recording.
+holdout recording, it lowers the holdout's ``-2 log L`` by more than
+`holdout_margin` (:func:`holdout_gain`: a noise term with its fitted value;
+a deterministic effect with its fitted shape, scaled on the holdout -- the
+check asks that the shape *replicate* in a run it never saw). Otherwise the
+next best effect is tried; the selection stops when none passes. Adding a
+deterministic effect refits the nonlinear parameters of those already in
+(a warm-up fitted alone stretches its time constant over a ramp); a
+backward check drops effects that a newer one made redundant. With no
+effect kept the report names none: the baseline explains the recording.
+
+Greedy steps can stop at one noise term standing in for two causes (a
+random walk absorbing flicker and a warm-up or hysteresis: neither alone
+beats it). A swap step (:func:`_swap`) then tries replacing each selected
+noise term by the other noise term, a deterministic effect or both, keeps
+the best replacement that lowers both the BIC and the holdout's
+``-2 log L`` and whose every new effect earns `bic_margin`, and returns to
+the forward steps; a set already visited ends the search.
 
 Look-alikes are told apart by the likelihood of their shapes, not by a
 rule: thermal lag must reproduce the decaying transient after every step,
@@ -45,7 +57,10 @@ from gyrocomp.diagnose.effects import (
 )
 from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 
-__all__ = ["Fitted", "Problem", "fit_baseline", "extend", "holdout_fit", "greedy"]
+__all__ = ["Fitted", "Problem", "fit_baseline", "extend", "holdout_fit", "holdout_gain", "greedy", "sample_arw"]
+
+_NONLINEAR = {"thermal_lag": "tau_s", "hysteresis": "deadband_c", "warmup": "tau_s", "periodic": "period_s"}
+"""The deterministic effects with a nonlinear parameter (grid-searched)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,7 +117,7 @@ class Problem:
 def fit_baseline(problem: Problem) -> Fitted:
     """The baseline: offset + temperature polynomial + white noise (ARW)."""
     Xb, names = problem.design_blocks({})
-    start = NoiseModel(arw=_arw_guess(problem.run))
+    start = NoiseModel(arw=sample_arw(problem.run))
     noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, start, ("arw",))
     k = Xb.shape[1] + 1
     return Fitted((), {}, noise, beta, names, deviance, k, problem.bic(deviance, k))
@@ -114,6 +129,13 @@ def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
     spec = dict(current.spec)
     if effect in DETERMINISTIC:
         spec[effect] = _best_nonlinear(problem, current, effect)
+        # The earlier effects' nonlinear parameters were fitted without this
+        # one (a warm-up fitted alone stretches its tau over a ramp): refit
+        # each with the new effect in (one coordinate-descent pass).
+        for other in current.spec:
+            if _NONLINEAR.get(other):
+                trial = dataclasses.replace(current, spec=spec)
+                spec[other] = _best_nonlinear(problem, trial, other)
     else:
         stochastic.append(effect)
     start_values = dataclasses.asdict(current.noise)
@@ -161,7 +183,7 @@ def residual_of(problem: Problem, model: Fitted):
 
 
 def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, start: Fitted | None = None):
-    """Forward selection (see the module docstring), from `start` (default: the baseline).
+    """Forward selection with swaps (see the module docstring), from `start` (default: the baseline).
 
     Returns
     -------
@@ -172,28 +194,61 @@ def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, sta
     steps : list of dict
         Per step: ``tried`` (each tried effect's ``delta_bic`` and
         ``delta_holdout_deviance``, None where the fit check already failed),
-        ``accepted`` (or None) and ``dropped`` (by the backward check).
+        ``accepted`` (or None) and ``dropped`` (by the backward check); a
+        swap step has ``swapped`` (``{"out": [...], "in": [...]}``) instead.
     baseline : Fitted
         The model the selection started from.
     """
     s = fit.settings
     baseline = start if start is not None else fit_baseline(fit)
     current = baseline
-    current_hold = holdout_fit(holdout, current)[0] if holdout is not None else None
-    remaining = list(candidates)
     first_step, steps = {}, []
-    rounds = 0
-    total = len(remaining)
-    done = 0
+    progress = _Progress(callback, len(candidates))
+    seen = {_key(current)}
+    for _ in range(2 * len(candidates) + 1):
+        current = _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress)
+        swapped = _swap(fit, holdout, baseline, current, candidates, progress)
+        if swapped is None or _key(swapped[0]) in seen:
+            break
+        current, step = swapped
+        seen.add(_key(current))
+        steps.append(step)
+    progress.finish()
+    return current, first_step, steps, baseline
+
+
+class _Progress:
+    """Counts candidate fits for a ``callback(done, total)``."""
+
+    def __init__(self, callback, total):
+        self.callback, self.done, self.total = callback, 0, total
+
+    def tick(self, more=0):
+        self.done += 1
+        self.total = max(self.total, self.done + more)
+        if self.callback is not None:
+            self.callback(self.done, self.total)
+
+    def finish(self):
+        if self.callback is not None:
+            self.callback(self.total, self.total)
+
+
+def _key(model: Fitted):
+    return frozenset(model.order)
+
+
+def _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress):
+    """Add effects while one passes both checks; drop those a newer one made redundant."""
+    s = fit.settings
+    remaining = [e for e in candidates if e not in current.order]
     while remaining and len(current.order) - len(baseline.order) < s.max_effects:
         trials = {}
-        for effect in remaining:
+        for k, effect in enumerate(remaining):
             trials[effect] = extend(fit, current, effect)
-            done += 1
-            if callback is not None:
-                callback(done, total)
+            progress.tick(len(remaining) - k - 1)
         if current is baseline:
-            first_step = dict(trials)
+            first_step.update(trials)
         record = {}
         accepted = None
         for effect in sorted(trials, key=lambda e: trials[e].bic):
@@ -202,14 +257,11 @@ def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, sta
             delta_hold = None
             passed = delta_bic < -s.bic_margin
             if passed and holdout is not None:
-                hold_dev = holdout_fit(holdout, model)[0]
-                delta_hold = hold_dev - current_hold
+                delta_hold = holdout_gain(holdout, current, model, effect)
                 passed = delta_hold < -s.holdout_margin
             record[effect] = {"delta_bic": delta_bic, "delta_holdout_deviance": delta_hold}
             if passed:
                 accepted = effect
-                if holdout is not None:
-                    current_hold = hold_dev
                 break
         steps.append({"tried": record, "accepted": accepted, "dropped": []})
         if accepted is None:
@@ -220,15 +272,100 @@ def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, sta
         if dropped:
             steps[-1]["dropped"] = dropped
             remaining += [e for e in dropped if e not in remaining]
-            if holdout is not None:
-                current_hold = holdout_fit(holdout, current)[0]
-        rounds += 1
-        if rounds > 2 * len(candidates):
-            break
-        total = done + len(remaining)
-    if callback is not None:
-        callback(total, total)
-    return current, first_step, steps, baseline
+    return current
+
+
+def holdout_gain(problem: Problem, current: Fitted, model: Fitted, effect: str) -> float:
+    """Change of the holdout's ``-2 log L`` from `current` to `model` (= `current` + `effect`).
+
+    A noise term is checked with its fitted value frozen. A deterministic
+    effect is checked for **replication**: the change ``d`` of the frozen
+    prediction that the fit run's estimate brings is scaled by ``alpha >= 0``
+    fitted on the holdout (with the per-run columns), so the check asks
+    whether the shape found on the fit run is also in the held-out run,
+    without charging it the fit run's amplitude error. Under no effect,
+    ``d`` is independent of the holdout's noise and the drop is a one-sided
+    ``chi^2_1`` (P(drop > 6) = 0.007); a shape that merely absorbed the fit
+    run's noise wander (a warm-up fitted to a random walk) has
+    ``alpha ~ 0`` on an independent run.
+    """
+    base_dev = holdout_fit(problem, current)[0]
+    if effect not in DETERMINISTIC:
+        return holdout_fit(problem, model)[0] - base_dev
+    run = problem.run
+    fixed_c, _, _ = _holdout_parts(problem, current)
+    fixed_m, X_free, _ = _holdout_parts(problem, model)
+    y = problem.y - block_means(fixed_c, run.n_per_block)
+    free_b = block_means(X_free, run.n_per_block)
+    d = block_means(fixed_m - fixed_c, run.n_per_block)
+    w = problem.basis.whitener(model.noise)
+    dev0, _ = profile_deviance(y, free_b, w)
+    dev1, beta = profile_deviance(y, np.column_stack([free_b, d]), w)
+    return (dev1 if beta[-1] > 0 else dev0) - base_dev
+
+
+def _holdout_parts(problem: Problem, model: Fitted):
+    """Frozen full-rate prediction of `model` on a run, its per-run columns and their mask."""
+    X, names = design(problem.run, model.spec, problem.poly_degree, problem.scale)
+    if names != model.names:
+        raise ValueError(f"holdout design {names} differs from the fit design {model.names}")
+    free = np.array([n in PER_RUN for n in names])
+    return X[:, ~free] @ model.beta[~free], X[:, free], free
+
+
+def _swap(fit, holdout, baseline, current, candidates, progress):
+    """Replace a selected noise term by the other one and/or a deterministic effect.
+
+    Greedy selection can stop at a noise term that stands in for two
+    causes (one random walk absorbing flicker and a warm-up): neither true
+    cause alone beats it, both together do. Each selected noise term is
+    replaced by the other noise term, by one unselected deterministic effect,
+    or by both; the best replacement by BIC is taken when it lowers the BIC
+    and the holdout's ``-2 log L`` (frozen parameters) below the current
+    model's and every effect it brings in earns `bic_margin` on its own.
+
+    Returns
+    -------
+    (Fitted, dict) or None
+        The new model and its step record, or None when no swap improves.
+    """
+    s = fit.settings
+    chosen = current.order[len(baseline.order) :]
+    noise_terms = [e for e in chosen if e not in DETERMINISTIC]
+    if not noise_terms:
+        return None
+    current_hold = holdout_fit(holdout, current)[0] if holdout is not None else 0.0
+    spare = [e for e in candidates if e in DETERMINISTIC and e not in current.order]
+    best = None
+    for out in noise_terms:
+        reduced = _refit(fit, baseline, tuple(e for e in current.order if e != out), current.spec, current.noise)
+        others = [e for e in candidates if e not in DETERMINISTIC and e not in current.order]
+        bases = [(reduced, ())] + [(extend(fit, reduced, o), (o,)) for o in others]
+        for model, added in bases:
+            options = [(model, added)] if added else []
+            for d in spare:
+                options.append((extend(fit, model, d), added + (d,)))
+                progress.tick()
+            for option, brought in options:
+                if option.bic >= current.bic or (best is not None and option.bic >= best[0].bic):
+                    continue
+                if not all(_earns(fit, baseline, option, e, s.bic_margin) for e in brought):
+                    continue
+                hold = holdout_fit(holdout, option)[0] if holdout is not None else 0.0
+                if hold < current_hold:
+                    best = (option, {"out": [out], "in": list(brought), "delta_bic": option.bic - current.bic,
+                                     "delta_holdout_deviance": hold - current_hold if holdout is not None else None})
+    if best is None:
+        return None
+    model, record = best
+    return model, {"tried": {}, "accepted": None, "dropped": [], "swapped": record}
+
+
+def _earns(problem, baseline, model, effect, margin):
+    """Whether removing `effect` from `model` raises the BIC by more than `margin`."""
+    order = tuple(e for e in model.order if e != effect)
+    spec = {k: v for k, v in model.spec.items() if k != effect}
+    return _refit(problem, baseline, order, spec, model.noise).bic > model.bic + margin
 
 
 def _backward(problem: Problem, baseline: Fitted, current: Fitted, added: str, margin: float):
@@ -276,11 +413,12 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str) -> dict:
     """
     s = problem.settings
     run = problem.run
-    if effect in ("temp_rate", "rate_ramp"):
+    if not _NONLINEAR.get(effect):
         return {}
     w = problem.basis.whitener(current.noise)
     length_s = run.n_blocks * run.block_s
-    X, names = design(run, current.spec, problem.poly_degree, problem.scale)
+    others = {k: v for k, v in current.spec.items() if k != effect}
+    X, names = design(run, others, problem.poly_degree, problem.scale)
     if effect == "thermal_lag":
         keep = [i for i, n in enumerate(names) if not n.startswith("temperature^")]
         X = X[:, keep]
@@ -325,7 +463,13 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str) -> dict:
     return {key: float(grid[i])}
 
 
-def _arw_guess(run: Run) -> float:
-    """White level from first differences: ``var(diff) / 2`` per sample, ``N = sigma / sqrt(fs)``."""
+def sample_arw(run: Run) -> float:
+    """White level from first differences: ``var(diff) / 2`` per sample, ``N = sigma / sqrt(fs)``.
+
+    Half the variance of first differences is the Allan variance at the
+    sample interval, ``N^2 fs`` plus terms of order ``1 / fs`` smaller
+    (IEEE Std 952): the white level the shortest timescales show, which
+    slow drift cannot inflate.
+    """
     d = np.diff(run.rate_dps)
     return float(np.sqrt(max(np.var(d) / 2.0, 1e-300) / run.fs_hz))

@@ -72,6 +72,12 @@ def test_thermal_lag_is_not_mistaken_for_temp_rate():
     _check(report, ["thermal_lag"])
     tau = report["candidates"]["thermal_lag"]["params"]["tau_s"]["value"]
     assert 240.0 < tau < 375.0
+    # The gap's white level is the sample-level one: at the shortest tau the
+    # baseline's residual (drift and all) matches it within sampling error,
+    # instead of reading a fraction of it with a block-mean ARW that absorbed the drift.
+    for run in ("fit", "holdout"):
+        first = report["localization"][run]["baseline"]["timescale"]["adev"][0]
+        assert 0.9 < first["ratio"] < 1.1, (run, first)
 
 
 @pytest.mark.slow
