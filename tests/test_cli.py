@@ -56,3 +56,16 @@ def test_start_up_imports_no_heavy_module():
 def test_unknown_command_is_a_usage_error():
     result = runner.invoke(app, ["frobnicate"])
     assert result.exit_code == 2
+
+
+def test_main_asks_for_one_blas_thread_unless_told_otherwise(monkeypatch):
+    import gyrocomp.cli as cli
+
+    monkeypatch.setattr(cli, "app", lambda: None)
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    monkeypatch.setenv("OMP_NUM_THREADS", "2")
+    cli.main()
+    import os
+
+    assert os.environ["OPENBLAS_NUM_THREADS"] == "1"
+    assert os.environ["OMP_NUM_THREADS"] == "2"
