@@ -1,7 +1,7 @@
 """Per-input output folders: the up-to-date check, the manifest, and the swap into place.
 
 Each input of a batch owns one folder ``DIR/<name>/``. The folder is built
-as a hidden temporary folder ``DIR/.<name>.tmp-XXXXXX`` (the stage writes
+as a hidden temporary folder ``DIR/.<name>.tmp-<random>`` (the stage writes
 its artefacts there, then :func:`write_manifest` writes ``manifest.json``
 LAST), and only then renamed onto ``DIR/<name>`` (:func:`commit_folder`).
 So a folder that carries a manifest is complete, and a batch killed at any
@@ -119,7 +119,7 @@ def write_manifest(folder: str | os.PathLike, *, command: str, input_name: str, 
 
 
 def new_folder(out_dir: str | os.PathLike, name: str) -> Path:
-    """A fresh hidden temporary folder ``OUT/.<name>.tmp-XXXXXX`` to build an input's outputs in."""
+    """A fresh hidden temporary folder ``OUT/.<name>.tmp-<random>`` to build an input's outputs in."""
     folder = Path(tempfile.mkdtemp(prefix=f".{name}{_TMP_TAG}", dir=out_dir))
     os.chmod(folder, 0o777 & ~io._umask())  # ordinary permissions, not mkdtemp's 0700
     return folder
@@ -128,7 +128,7 @@ def new_folder(out_dir: str | os.PathLike, name: str) -> Path:
 def commit_folder(tmp: str | os.PathLike, target: str | os.PathLike) -> None:
     """Move a finished temporary folder onto `target`, replacing an outdated one.
 
-    The outdated folder is first renamed aside (``.<name>.old-XXXXXX``), the
+    The outdated folder is first renamed aside (``.<name>.old-<random>``), the
     new one renamed into place, then the old one deleted: at no instant
     does `target` hold a mix of old and new files.
     """
