@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(BIN)/gyrocomp allan sample_data/oven_train.parquet sample_data/oven_test.parquet --out out/allan.json --plot out/allan.png
 	$(BIN)/gyrocomp run configs/compare.toml sample_data/oven_train.parquet --test sample_data/oven_test.parquet \
-		--workers 2 --set 'run.overrides=["iceemdan-se-tfpf-nsga2elm:decompose.ensemble=4"]' --out out
+		--workers 2 --out out
 
 test: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/python -m pytest -q -m "not slow" -n 2
