@@ -349,9 +349,12 @@ def write_report(
     from gyrocomp import io
     from gyrocomp.config import settings_dict
 
+    spec = columns or io.ColumnSpec()
+    source = {"time": spec.time, "rate": spec.rate, "temperature": spec.temperature}.get(column, column)
+    usecols = list(dict.fromkeys([spec.time, spec.rate, source]))  # the only columns read
     series, inputs = [], []
     for path in recordings:
-        rec = io.read_recording(path, columns or io.ColumnSpec(), min_samples=3, resample=resample)
+        rec = io.read_recording(path, spec, min_samples=3, resample=resample, usecols=usecols)
         if column not in rec.data:
             raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(map(str, rec.data.columns))}")
         series.append(analyse(rec.data[column].to_numpy(), rec.fs_hz, taus=taus, name=Path(rec.name).name, column=column, settings=settings))
@@ -451,12 +454,13 @@ def _phase(x) -> np.ndarray:
         raise InputError(f"rate samples must be 1-D, got shape {y.shape}")
     if len(y) < 3:
         raise InputError(f"Allan deviation needs at least 3 samples, got {len(y)}")
-    if not np.isfinite(y).all():
+    mean = y.mean()  # finite exactly when every sample is (NaN and inf propagate), else look closer
+    if not math.isfinite(mean) and not np.isfinite(y).all():
         i = int(np.flatnonzero(~np.isfinite(y))[0])
         raise InputError(f"rate sample {i} is {y[i]!r}; the Allan deviation needs finite values")
     phase = np.empty(len(y) + 1)
     phase[0] = 0.0
-    np.subtract(y, y.mean(), out=phase[1:])
+    np.subtract(y, mean, out=phase[1:])
     np.cumsum(phase[1:], out=phase[1:])
     return phase
 
@@ -540,39 +544,73 @@ def _noise_id(phase: np.ndarray, m: int, min_points: int) -> int:
     standard to Allan variance against its value for each noise type, with
     boundaries at geometric means ([1]_ sec. 5.6; white and flicker PM are
     not told apart there, both give alpha = 1).
+
+    The m-averages (times m: alpha does not depend on scale) are the
+    differences of every m-th phase point; they are streamed in chunks from
+    `phase`, one pass for the trend and one per differencing order, so no
+    array of their length is built.
     """
-    z = np.diff(phase[::m])  # m x the non-overlapping m-averages (alpha does not depend on scale)
-    n = len(z)
+    n = (len(phase) - 1) // m
     if n < min_points:
-        return _b1_noise_id(z)
-    _detrend_inplace(z)
-    d = 0
-    while True:
-        mu = z.mean()
-        n_z = len(z)
-        lag1 = np.einsum("i,i->", z[:-1], z[1:]) - mu * (2.0 * z.sum() - z[0] - z[-1]) + (n_z - 1) * mu * mu
-        r1 = lag1 / (np.einsum("i,i->", z, z) - n_z * mu * mu)
-        delta = r1 / (1.0 + r1)
-        if delta < 0.25 or d == 2:
-            return int(np.clip(-round(2.0 * delta) - 2 * d, -2, 2))
-        z = np.diff(z)
-        d += 1
-
-
-def _detrend_inplace(z: np.ndarray) -> None:
-    """Subtract the least-squares line from `z`, in chunks (no N-sized temporaries)."""
-    n = len(z)
-    z -= z.mean()
+        return _b1_noise_id(np.diff(phase[: n * m + 1 : m]))
+    mean = (phase[n * m] - phase[0]) / n  # the differences telescope
     center = (n - 1) / 2.0
-    step = 16 * _CHUNK
-    tz = 0.0
-    for start in range(0, n, step):
-        t = np.arange(start, min(start + step, n), dtype=float) - center
-        tz += np.einsum("i,i->", t, z[start : start + len(t)])
+    tz = sum(np.einsum("i,i->", t, z - mean) for t, z in _averages(phase, m, n, center))
     slope = tz / (n * (n * n - 1.0) / 12.0)
+    for d in (0, 1):
+        delta = _lag1_delta(phase, m, n, mean, slope, center, d)
+        if delta < 0.25:
+            return int(np.clip(-round(2.0 * delta) - 2 * d, -2, 2))
+    delta = _lag1_delta(phase, m, n, mean, slope, center, 2)
+    return int(np.clip(-round(2.0 * delta) - 4, -2, 2))
+
+
+def _lag1_delta(phase, m, n, mean, slope, center, d) -> float:
+    """delta = r1/(1 + r1) of the d-times differenced, detrended m-averages ([2]_ eq. (3))."""
+    total = sq = lag = 0.0
+    first = last = None
+    carry = []
+    for t, z in _averages(phase, m, n, center):
+        z -= mean
+        z -= slope * t
+        z = _diff_streamed(z, d, carry)
+        if not len(z):
+            continue
+        if first is None:
+            first = z[0]
+        else:
+            lag += last * z[0]
+        total += z.sum()
+        sq += np.einsum("i,i->", z, z)
+        lag += np.einsum("i,i->", z[:-1], z[1:])
+        last = z[-1]
+    n_z = n - d
+    mu = total / n_z
+    lag1 = lag - mu * (2.0 * total - first - last) + (n_z - 1) * mu * mu
+    r1 = lag1 / (sq - n_z * mu * mu)
+    return r1 / (1.0 + r1)
+
+
+def _averages(phase: np.ndarray, m: int, n: int, center: float):
+    """Chunks (t - center, z) of the n differences z_i = x_{(i+1)m} - x_{im}."""
+    step = 16 * _CHUNK
     for start in range(0, n, step):
-        t = np.arange(start, min(start + step, n), dtype=float) - center
-        z[start : start + len(t)] -= slope * t
+        stop = min(start + step, n)
+        t = np.arange(start, stop, dtype=float)
+        t -= center
+        yield t, np.diff(phase[start * m : stop * m + 1 : m])
+
+
+def _diff_streamed(z: np.ndarray, d: int, carry: list) -> np.ndarray:
+    """The d-th difference of a chunk, continuing from the chunk before (`carry` holds its tails)."""
+    for level in range(d):
+        head = z[-1]
+        z = np.diff(z, prepend=carry[level]) if level < len(carry) else np.diff(z)
+        if level < len(carry):
+            carry[level] = head
+        else:
+            carry.append(head)
+    return z
 
 
 def _b1_noise_id(z: np.ndarray) -> int:

@@ -27,7 +27,7 @@ import os
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, Sequence
 
 import numpy as np
 import pandas as pd
@@ -153,6 +153,7 @@ def read_recording(
     min_samples: int = 2,
     jitter_tolerance: float = 0.5,
     resample: bool = False,
+    usecols: Sequence[str] | None = None,
 ) -> Recording:
     """Read and validate a recording from CSV or Parquet.
 
@@ -172,6 +173,11 @@ def read_recording(
     resample : bool
         Instead of refusing a jittered or gapped time axis, interpolate every
         column linearly onto a uniform grid at the median interval.
+    usecols : sequence of str, optional
+        File columns to load (names as in the file, e.g. ``columns.time``);
+        the others are never read (Parquet) or parsed (CSV). Default: all.
+        When one of them is missing, the whole file is read so that the
+        error names every column it has.
 
     Returns
     -------
@@ -188,14 +194,19 @@ def read_recording(
     name, source, sha = _open_source(path)
     kind = _kind(name)
     metadata = {}
-    if kind == "parquet":
-        frame, metadata = _parse_parquet(name, source)
-        where = "row"
-        first = 1
-    else:
-        frame = _parse_csv(name, source)
-        where = "line"
-        first = 2  # line 1 is the header
+    wanted = None if usecols is None else list(dict.fromkeys(usecols))
+    while True:
+        if kind == "parquet":
+            frame, metadata = _parse_parquet(name, source, usecols=wanted, direct=True)
+            where = "row"
+            first = 1
+        else:
+            frame = _parse_csv(name, source, usecols=wanted)
+            where = "line"
+            first = 2  # line 1 is the header
+        if wanted is None or all(c in frame.columns for c in wanted):
+            break
+        wanted = None  # a column is missing: read them all for the error message
     del source
     return recording_from_frame(
         frame,
@@ -208,6 +219,7 @@ def read_recording(
         resample=resample,
         metadata=metadata,
         _where=(where, first),
+        _owned=True,
     )
 
 
@@ -223,10 +235,13 @@ def recording_from_frame(
     resample: bool = False,
     metadata: dict | None = None,
     _where: tuple[str, int] = ("row", 1),
+    _owned: bool = False,
 ) -> Recording:
     """Validate an in-memory table as a recording (see :func:`read_recording`).
 
-    `sha256` defaults to the hash of the table's CSV form.
+    `sha256` defaults to the hash of the table's CSV form. Time and rate are
+    copies (the private `_owned` says `frame` is a throw-away of
+    :func:`read_recording`, whose own columns are then reused).
     """
     where, first = _where
 
@@ -250,43 +265,48 @@ def recording_from_frame(
     out = {}
     for key, src in wanted.items():
         out[key] = _numeric_column(frame[src], src, locate)
+    scale = {"time": TIME_UNITS[columns.time_unit], "rate": RATE_UNITS[columns.rate_unit]}
+    for key, factor in scale.items():
+        out[key] = _own(out[key], _owned) if factor == 1.0 else out[key] * factor
+    if "temperature" in out and columns.temperature_unit == "K":
+        out["temperature"] = out["temperature"] - 273.15
     for extra in frame.columns:
         if extra not in wanted.values() and extra not in out:
             col = pd.to_numeric(frame[extra], errors="coerce")
             if col.notna().all():
                 out[str(extra)] = col.to_numpy(dtype=float)
-    out["time"] = out["time"] * TIME_UNITS[columns.time_unit]
-    out["rate"] = out["rate"] * RATE_UNITS[columns.rate_unit]
     if "temperature" in out:
-        if columns.temperature_unit == "K":
-            out["temperature"] = out["temperature"] - 273.15
         _check_temperature(out["temperature"], columns.temperature, locate)
     n = len(out["time"])
     if n < min_samples:
         raise InputError(f"{name}: {n} samples, this command needs at least {min_samples}")
     time = out["time"]
-    dt = np.diff(time)
-    bad = np.flatnonzero(dt <= 0)
-    if bad.size:
-        i = bad[0] + 1
-        what = "duplicates" if dt[bad[0]] == 0 else "goes back from"
-        raise InputError(
-            f"{locate(i)}: `{columns.time}` = {float(time[i])!r} {what} the previous "
-            f"time {float(time[i - 1])!r}; time must be strictly increasing"
-        )
-    nominal = float(np.median(dt)) if dt.size else 1.0
+    dt = np.diff(time)  # the one N-sized temporary of the checks; partitioned in place below
+    nominal = 1.0
     if dt.size:
+        i_min, i_max = int(np.argmin(dt)), int(np.argmax(dt))
+        dt_min, dt_max = float(dt[i_min]), float(dt[i_max])
+        if dt_min <= 0:
+            b = int(np.flatnonzero(dt <= 0)[0])
+            i = b + 1
+            what = "duplicates" if dt[b] == 0 else "goes back from"
+            raise InputError(
+                f"{locate(i)}: `{columns.time}` = {float(time[i])!r} {what} the previous "
+                f"time {float(time[i - 1])!r}; time must be strictly increasing"
+            )
+        nominal = _median_inplace(dt)
         # the largest |dt - nominal| is at the largest or the smallest interval
-        worst = int(np.argmax(dt)) if dt.max() - nominal >= nominal - dt.min() else int(np.argmin(dt))
-        if abs(dt[worst] - nominal) > jitter_tolerance * nominal:
+        worst, dt_worst = (i_max, dt_max) if dt_max - nominal >= nominal - dt_min else (i_min, dt_min)
+        if abs(dt_worst - nominal) > jitter_tolerance * nominal:
             if not resample:
                 raise InputError(
-                    f"{locate(worst + 1)}: sampling interval {dt[worst]:.6g} s in "
+                    f"{locate(worst + 1)}: sampling interval {dt_worst:.6g} s in "
                     f"`{columns.time}`, the median is {nominal:.6g} s (tolerance "
                     f"{jitter_tolerance:.0%}); pass --resample to interpolate onto "
                     f"a uniform grid"
                 )
             out = _resample(out, nominal)
+    del dt
     data = pd.DataFrame(out, copy=False)  # one block per column: no 2-D stacking copy
     if sha256 is None:
         sha256 = hashlib.sha256(frame.to_csv(index=False).encode()).hexdigest()
@@ -528,11 +548,12 @@ def _kind(name: str) -> str:
     raise InputError(f"{name}: unknown extension {suffix!r}; use .csv or .parquet")
 
 
-def _parse_csv(name: str, source: str | bytes) -> pd.DataFrame:
+def _parse_csv(name: str, source: str | bytes, usecols: Sequence[str] | None = None) -> pd.DataFrame:
     if isinstance(source, bytes):
         source = _stdio.BytesIO(source)
+    keep = None if usecols is None else set(usecols).__contains__
     try:
-        return pd.read_csv(source, comment="#", skipinitialspace=True)
+        return pd.read_csv(source, comment="#", skipinitialspace=True, usecols=keep)
     except pd.errors.EmptyDataError:
         raise InputError(f"{name}: file is empty") from None
     except pd.errors.ParserError as err:
@@ -541,7 +562,15 @@ def _parse_csv(name: str, source: str | bytes) -> pd.DataFrame:
         raise InputError(f"{name}: not a text CSV file") from None
 
 
-def _parse_parquet(name: str, source: str | bytes) -> tuple[pd.DataFrame, dict]:
+def _parse_parquet(
+    name: str, source: str | bytes, usecols: Sequence[str] | None = None, direct: bool = False
+) -> tuple[pd.DataFrame, dict]:
+    """Frame and gyrocomp metadata of a Parquet file.
+
+    `usecols` reads only those of the file's columns. `direct` converts
+    null-free numeric columns to NumPy without pandas' consolidating copy
+    (the frame's columns are then independent, writable arrays).
+    """
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -552,7 +581,10 @@ def _parse_parquet(name: str, source: str | bytes) -> tuple[pd.DataFrame, dict]:
         if isinstance(source, bytes):
             table = pq.read_table(pa.BufferReader(source))
         else:
-            table = pq.read_table(source, memory_map=True)
+            if usecols is not None:
+                present = set(pq.read_schema(source, memory_map=True).names)
+                usecols = [c for c in usecols if c in present]
+            table = pq.read_table(source, columns=usecols, memory_map=True)
     except (pa.ArrowInvalid, OSError) as err:
         raise InputError(f"{name}: not a readable Parquet file ({err})") from None
     meta = table.schema.metadata or {}
@@ -562,7 +594,41 @@ def _parse_parquet(name: str, source: str | bytes) -> tuple[pd.DataFrame, dict]:
             header = json.loads(meta[_METADATA_KEY])
         except json.JSONDecodeError:
             raise InputError(f"{name}: corrupted gyrocomp metadata") from None
-    return table.to_pandas(), header
+    if not direct:
+        return table.to_pandas(), header
+    return _arrow_to_frame(table), header
+
+
+def _arrow_to_frame(table) -> pd.DataFrame:
+    """``table.to_pandas()`` for a recording, without pandas' consolidating copy.
+
+    When every column is a null-free integer or float column, each becomes
+    a NumPy array directly (one copy of the decoded chunks, freed column by
+    column); a stored pandas index is left out, as :func:`recording_from_frame`
+    does not use it. Any other table goes through pandas as before.
+    """
+    import pyarrow as pa
+
+    index_names, renamed = set(), False
+    pandas_meta = (table.schema.metadata or {}).get(b"pandas")
+    if pandas_meta:
+        meta = json.loads(pandas_meta)
+        index_names = {c for c in meta.get("index_columns", []) if isinstance(c, str)}
+        renamed = any(c.get("name") != c.get("field_name") for c in meta.get("columns", []) if c.get("field_name") not in index_names)
+    names = [c for c in table.column_names if c not in index_names]
+    plain = all(
+        (pa.types.is_floating(table.schema.field(c).type) or pa.types.is_integer(table.schema.field(c).type))
+        and table.column(c).null_count == 0
+        for c in names
+    )
+    if renamed or not plain or len(set(table.column_names)) != len(table.column_names):
+        return table.to_pandas()
+    arrays = {}
+    for col in names:
+        values = table.column(col).to_numpy()
+        arrays[col] = values if values.flags.writeable else values.copy()
+        table = table.drop_columns([col])
+    return pd.DataFrame(arrays, copy=False)
 
 
 def _numeric_column(series: pd.Series, src: str, locate) -> np.ndarray:
@@ -582,6 +648,37 @@ def _numeric_column(series: pd.Series, src: str, locate) -> np.ndarray:
         what = "missing or NaN" if np.isnan(values[i]) else f"{float(values[i])!r}"
         raise InputError(f"{locate(i)}: `{src}` is {what}")
     return values
+
+
+def _own(values: np.ndarray, owned: bool) -> np.ndarray:
+    """`values` as a writable array the recording may keep.
+
+    Reused when `owned` and the memory under it is this column alone (a
+    column of a throw-away frame, of which pandas hands out a read-only
+    view); otherwise copied, so the recording neither aliases a caller's
+    table nor keeps a 2-D block of other columns alive.
+    """
+    base = values
+    while isinstance(base.base, np.ndarray):
+        base = base.base
+    if owned and base.size == values.size:
+        try:
+            values.setflags(write=True)
+            return values
+        except ValueError:
+            pass
+    return values.copy()
+
+
+def _median_inplace(values: np.ndarray) -> float:
+    """``np.median(values)`` without its copy; reorders `values`."""
+    n = len(values)
+    k = n // 2
+    if n % 2:
+        values.partition(k)
+        return float(values[k])
+    values.partition((k - 1, k))
+    return float((values[k - 1] + values[k]) / 2.0)
 
 
 def _check_temperature(temperature: np.ndarray, src: str, locate) -> None:

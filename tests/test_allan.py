@@ -14,6 +14,7 @@ import json
 
 import allantools
 import numpy as np
+import pandas as pd
 import pytest
 from numpy.testing import assert_allclose
 
@@ -240,3 +241,63 @@ def test_plot_writes_png(tmp_path):
     al.plot_allan([s], out)
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert [p.name for p in tmp_path.iterdir()] == ["allan.png"]
+
+
+@pytest.mark.parametrize("kind", ["csv", "parquet"])
+def test_read_recording_usecols_loads_only_those_columns(tmp_path, kind):
+    from gyrocomp import io
+
+    t = np.arange(50) / 10.0
+    frame = pd.DataFrame({"t": t, "w": np.sin(t), "temperature": 25.0 + t, "other": np.cos(t)})
+    path = tmp_path / f"rec.{kind}"
+    frame.to_csv(path, index=False) if kind == "csv" else frame.to_parquet(path)
+    spec = io.ColumnSpec(time="t", rate="w")
+    full = io.read_recording(path, spec)
+    some = io.read_recording(path, spec, usecols=["t", "w"])
+    assert list(full.data.columns) == ["time", "rate", "temperature", "other"]
+    assert list(some.data.columns) == ["time", "rate"]
+    for col in ("time", "rate"):
+        np.testing.assert_array_equal(some.data[col], full.data[col])
+    assert (some.fs_hz, some.sha256) == (full.fs_hz, full.sha256)
+    # a missing column is reported with every column the file has, as without usecols
+    bad = io.ColumnSpec(time="t", rate="rate")
+    with pytest.raises(InputError) as without:
+        io.read_recording(path, bad)
+    with pytest.raises(InputError) as with_usecols:
+        io.read_recording(path, bad, usecols=["t", "rate"])
+    assert str(with_usecols.value) == str(without.value)
+    assert "'other'" in str(with_usecols.value)
+
+
+def test_parquet_recording_equals_pandas_reading(tmp_path):
+    """The direct Arrow -> NumPy path gives what ``to_pandas`` gave: index, ints, nulls."""
+    from gyrocomp import io
+
+    t = np.arange(40) / 4.0
+    frame = pd.DataFrame({"time": t, "rate": np.arange(40), "aux": np.where(t > 5, np.nan, t)}, index=np.arange(40) + 7)
+    path = tmp_path / "rec.parquet"
+    frame.to_parquet(path)
+    rec = io.read_recording(path)
+    expected = io.recording_from_frame(pd.read_parquet(path), sha256=rec.sha256, name=rec.name)
+    pd.testing.assert_frame_equal(rec.data, expected.data)
+    rec.data.loc[0, "rate"] = 5.0  # the recording's columns are writable
+    assert rec.data["rate"].iloc[0] == 5.0
+
+
+@pytest.mark.parametrize("d", [0, 1, 2])
+def test_streamed_lag1_equals_whole_array(d):
+    """Noise identification streams chunks; across chunk borders it equals the plain formula."""
+    rng = np.random.default_rng(5)
+    y = rng.normal(size=16 * al._CHUNK + 12_345) + 1e-3 * np.cumsum(rng.normal(size=16 * al._CHUNK + 12_345))
+    phase = al._phase(y)
+    z = np.diff(phase)
+    t = np.arange(len(z), dtype=float)
+    z = z - np.polyval(np.polyfit(t, z, 1), t)
+    z = np.diff(z, n=d)
+    z = z - z.mean()
+    r1 = np.dot(z[:-1], z[1:]) / np.dot(z, z)
+    n = len(y)
+    center = (n - 1) / 2.0
+    mean = phase[-1] / n
+    slope = sum(np.einsum("i,i->", tt, zz - mean) for tt, zz in al._averages(phase, 1, n, center)) / (n * (n * n - 1.0) / 12.0)
+    assert_allclose(al._lag1_delta(phase, 1, n, mean, slope, center, d), r1 / (1.0 + r1), rtol=1e-9)
