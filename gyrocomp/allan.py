@@ -546,16 +546,18 @@ def _noise_id(phase: np.ndarray, m: int, min_points: int) -> int:
     not told apart there, both give alpha = 1).
 
     The m-averages (times m: alpha does not depend on scale) are the
-    differences of every m-th phase point; they are streamed in chunks from
-    `phase`, one pass for the trend and one per differencing order, so no
-    array of their length is built.
+    differences of every m-th phase point; their trend is a sum over the
+    phase (summation by parts), and they are streamed in chunks from `phase`
+    once per differencing order, so no array of their length is built.
     """
     n = (len(phase) - 1) // m
     if n < min_points:
         return _b1_noise_id(np.diff(phase[: n * m + 1 : m]))
-    mean = (phase[n * m] - phase[0]) / n  # the differences telescope
+    x = phase[: n * m + 1 : m]
+    mean = (x[-1] - x[0]) / n  # the differences telescope
     center = (n - 1) / 2.0
-    tz = sum(np.einsum("i,i->", t, z - mean) for t, z in _averages(phase, m, n, center))
+    # sum_i (i - center) z_i by parts: (n - 1) x_n - sum_{0<i<n} x_i - center (x_n - x_0)
+    tz = (n - 1) * x[-1] - x[1:-1].sum() - center * (x[-1] - x[0])
     slope = tz / (n * (n * n - 1.0) / 12.0)
     for d in (0, 1):
         delta = _lag1_delta(phase, m, n, mean, slope, center, d)
@@ -570,9 +572,13 @@ def _lag1_delta(phase, m, n, mean, slope, center, d) -> float:
     total = sq = lag = 0.0
     first = last = None
     carry = []
-    for t, z in _averages(phase, m, n, center):
-        z -= mean
-        z -= slope * t
+    step = 4 * _CHUNK
+    ramp = slope * np.arange(step, dtype=float)
+    for start in range(0, n, step):
+        stop = min(start + step, n)
+        z = np.diff(phase[start * m : stop * m + 1 : m])  # the m-averages start..stop-1, times m
+        z -= mean + slope * (start - center)
+        z -= ramp[: stop - start]
         z = _diff_streamed(z, d, carry)
         if not len(z):
             continue
@@ -589,16 +595,6 @@ def _lag1_delta(phase, m, n, mean, slope, center, d) -> float:
     lag1 = lag - mu * (2.0 * total - first - last) + (n_z - 1) * mu * mu
     r1 = lag1 / (sq - n_z * mu * mu)
     return r1 / (1.0 + r1)
-
-
-def _averages(phase: np.ndarray, m: int, n: int, center: float):
-    """Chunks (t - center, z) of the n differences z_i = x_{(i+1)m} - x_{im}."""
-    step = 16 * _CHUNK
-    for start in range(0, n, step):
-        stop = min(start + step, n)
-        t = np.arange(start, stop, dtype=float)
-        t -= center
-        yield t, np.diff(phase[start * m : stop * m + 1 : m])
 
 
 def _diff_streamed(z: np.ndarray, d: int, carry: list) -> np.ndarray:

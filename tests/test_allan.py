@@ -288,7 +288,7 @@ def test_parquet_recording_equals_pandas_reading(tmp_path):
 def test_streamed_lag1_equals_whole_array(d):
     """Noise identification streams chunks; across chunk borders it equals the plain formula."""
     rng = np.random.default_rng(5)
-    y = rng.normal(size=16 * al._CHUNK + 12_345) + 1e-3 * np.cumsum(rng.normal(size=16 * al._CHUNK + 12_345))
+    y = rng.normal(size=4 * al._CHUNK + 12_345) + 1e-3 * np.cumsum(rng.normal(size=4 * al._CHUNK + 12_345))
     phase = al._phase(y)
     z = np.diff(phase)
     t = np.arange(len(z), dtype=float)
@@ -299,5 +299,5 @@ def test_streamed_lag1_equals_whole_array(d):
     n = len(y)
     center = (n - 1) / 2.0
     mean = phase[-1] / n
-    slope = sum(np.einsum("i,i->", tt, zz - mean) for tt, zz in al._averages(phase, 1, n, center)) / (n * (n * n - 1.0) / 12.0)
+    slope = np.dot(np.arange(n) - center, np.diff(phase)) / (n * (n * n - 1.0) / 12.0)
     assert_allclose(al._lag1_delta(phase, 1, n, mean, slope, center, d), r1 / (1.0 + r1), rtol=1e-9)
