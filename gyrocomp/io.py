@@ -567,9 +567,10 @@ def _parse_parquet(
 ) -> tuple[pd.DataFrame, dict]:
     """Frame and gyrocomp metadata of a Parquet file.
 
-    `usecols` reads only those of the file's columns. `direct` converts
-    null-free numeric columns to NumPy without pandas' consolidating copy
-    (the frame's columns are then independent, writable arrays).
+    `usecols` reads only those of the file's columns. `direct` (a file, for
+    :func:`read_recording`) decodes null-free numeric columns row group by
+    row group straight into NumPy arrays (:func:`_parquet_frame`), without
+    the whole Arrow table and pandas' consolidating copy.
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -581,53 +582,68 @@ def _parse_parquet(
         if isinstance(source, bytes):
             table = pq.read_table(pa.BufferReader(source))
         else:
+            if direct:
+                parquet = pq.ParquetFile(source, memory_map=True)
+                frame = _parquet_frame(parquet, usecols)
+                if frame is not None:
+                    return frame, _gyrocomp_header(name, parquet.schema_arrow.metadata)
             if usecols is not None:
                 present = set(pq.read_schema(source, memory_map=True).names)
                 usecols = [c for c in usecols if c in present]
             table = pq.read_table(source, columns=usecols, memory_map=True)
     except (pa.ArrowInvalid, OSError) as err:
         raise InputError(f"{name}: not a readable Parquet file ({err})") from None
-    meta = table.schema.metadata or {}
-    header = {}
-    if _METADATA_KEY in meta:
-        try:
-            header = json.loads(meta[_METADATA_KEY])
-        except json.JSONDecodeError:
-            raise InputError(f"{name}: corrupted gyrocomp metadata") from None
-    if not direct:
-        return table.to_pandas(), header
-    return _arrow_to_frame(table), header
+    return table.to_pandas(), _gyrocomp_header(name, table.schema.metadata)
 
 
-def _arrow_to_frame(table) -> pd.DataFrame:
-    """``table.to_pandas()`` for a recording, without pandas' consolidating copy.
+def _gyrocomp_header(name: str, meta: dict | None) -> dict:
+    """The artefact header stored under ``gyrocomp`` in Parquet key-value metadata, else {}."""
+    meta = meta or {}
+    if _METADATA_KEY not in meta:
+        return {}
+    try:
+        return json.loads(meta[_METADATA_KEY])
+    except json.JSONDecodeError:
+        raise InputError(f"{name}: corrupted gyrocomp metadata") from None
 
-    When every column is a null-free integer or float column, each becomes
-    a NumPy array directly (one copy of the decoded chunks, freed column by
-    column); a stored pandas index is left out, as :func:`recording_from_frame`
-    does not use it. Any other table goes through pandas as before.
+
+def _parquet_frame(parquet, usecols: Sequence[str] | None) -> pd.DataFrame | None:
+    """What ``read_table(columns=usecols).to_pandas()`` gives a recording, or None.
+
+    Each (wanted) column is allocated once as a NumPy array and filled row
+    group by row group, so only one row group is ever held by Arrow. A
+    stored pandas index is left out, as :func:`recording_from_frame` does
+    not use it. None (read the table the ordinary way) when a column is
+    not a null-free integer or float column, or pandas renamed columns.
     """
     import pyarrow as pa
 
+    schema = parquet.schema_arrow
     index_names, renamed = set(), False
-    pandas_meta = (table.schema.metadata or {}).get(b"pandas")
+    pandas_meta = (schema.metadata or {}).get(b"pandas")
     if pandas_meta:
         meta = json.loads(pandas_meta)
         index_names = {c for c in meta.get("index_columns", []) if isinstance(c, str)}
         renamed = any(c.get("name") != c.get("field_name") for c in meta.get("columns", []) if c.get("field_name") not in index_names)
-    names = [c for c in table.column_names if c not in index_names]
-    plain = all(
-        (pa.types.is_floating(table.schema.field(c).type) or pa.types.is_integer(table.schema.field(c).type))
-        and table.column(c).null_count == 0
-        for c in names
-    )
-    if renamed or not plain or len(set(table.column_names)) != len(table.column_names):
-        return table.to_pandas()
-    arrays = {}
-    for col in names:
-        values = table.column(col).to_numpy()
-        arrays[col] = values if values.flags.writeable else values.copy()
-        table = table.drop_columns([col])
+    names = [c for c in schema.names if c not in index_names and (usecols is None or c in usecols)]
+    types = [schema.field(c).type for c in names]
+    if renamed or not names or len(set(schema.names)) != len(schema.names):
+        return None
+    if not all(pa.types.is_floating(t) or pa.types.is_integer(t) for t in types):
+        return None
+    arrays = {c: np.empty(parquet.metadata.num_rows, dtype=t.to_pandas_dtype()) for c, t in zip(names, types)}
+    start = 0
+    for group in range(parquet.num_row_groups):
+        part = parquet.read_row_group(group, columns=names)
+        for c in names:
+            column = part.column(c)
+            if column.null_count:
+                return None
+            at = start
+            for chunk in column.chunks:
+                arrays[c][at : at + len(chunk)] = chunk.to_numpy(zero_copy_only=True)
+                at += len(chunk)
+        start += part.num_rows
     return pd.DataFrame(arrays, copy=False)
 
 

@@ -269,17 +269,23 @@ def test_read_recording_usecols_loads_only_those_columns(tmp_path, kind):
     assert "'other'" in str(with_usecols.value)
 
 
-def test_parquet_recording_equals_pandas_reading(tmp_path):
-    """The direct Arrow -> NumPy path gives what ``to_pandas`` gave: index, ints, nulls."""
+@pytest.mark.parametrize("with_nulls", [False, True])
+def test_parquet_recording_equals_pandas_reading(tmp_path, with_nulls):
+    """The row-group-wise Parquet -> NumPy path gives what ``to_pandas`` gave: index, ints, nulls."""
+    import pyarrow.parquet as pq
+
     from gyrocomp import io
 
     t = np.arange(40) / 4.0
-    frame = pd.DataFrame({"time": t, "rate": np.arange(40), "aux": np.where(t > 5, np.nan, t)}, index=np.arange(40) + 7)
+    aux = np.where(t > 5, np.nan, t) if with_nulls else t**2  # NaN is stored as a null, in later row groups
+    frame = pd.DataFrame({"time": t, "rate": np.arange(40), "aux": aux}, index=np.arange(40) + 7)
     path = tmp_path / "rec.parquet"
-    frame.to_parquet(path)
+    frame.to_parquet(path, row_group_size=7)
+    assert (io._parquet_frame(pq.ParquetFile(path), None) is None) == with_nulls  # which path is tested
     rec = io.read_recording(path)
     expected = io.recording_from_frame(pd.read_parquet(path), sha256=rec.sha256, name=rec.name)
     pd.testing.assert_frame_equal(rec.data, expected.data)
+    assert list(rec.data.columns) == (["time", "rate"] if with_nulls else ["time", "rate", "aux"])
     rec.data.loc[0, "rate"] = 5.0  # the recording's columns are writable
     assert rec.data["rate"].iloc[0] == 5.0
 
