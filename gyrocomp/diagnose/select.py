@@ -16,7 +16,16 @@ holdout recording, it lowers the holdout's ``-2 log L`` by more than
 `holdout_margin` (:func:`holdout_gain`: a noise term with its fitted value;
 a deterministic effect with its fitted shape, scaled on the holdout -- the
 check asks that the shape *replicate* in a run it never saw). Otherwise the
-next best effect is tried; the selection stops when none passes. Adding a
+next best effect is tried. When none passes and a holdout is given, a
+deterministic effect may still enter on the **joint** likelihood of both
+runs (:func:`joint_gain`: coefficients shared, offsets and noise
+realisations per run), which adds the evidence of the two runs: a random
+walk does not repeat between runs, a deterministic effect does. It must
+lower the joint BIC by more than `bic_margin`, lower the fit run's
+``-2 log L`` and replicate on the holdout (alpha > 0 below). Its parameters
+are still fitted on the fit run only, so the held-out gap stays a figure
+of parameters that never saw the holdout, though the holdout then took
+part in the selection. The selection stops when nothing passes. Adding a
 deterministic effect refits the nonlinear parameters of those already in
 (a warm-up fitted alone stretches its time constant over a ramp); a
 backward check drops effects that a newer one made redundant. With no
@@ -57,7 +66,7 @@ from gyrocomp.diagnose.effects import (
 )
 from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 
-__all__ = ["Fitted", "Problem", "fit_baseline", "extend", "holdout_fit", "holdout_gain", "greedy", "sample_arw"]
+__all__ = ["Fitted", "Problem", "fit_baseline", "extend", "holdout_fit", "holdout_gain", "joint_gain", "greedy", "sample_arw"]
 
 _NONLINEAR = {"thermal_lag": "tau_s", "hysteresis": "deadband_c", "warmup": "tau_s", "periodic": "period_s"}
 """The deterministic effects with a nonlinear parameter (grid-searched)."""
@@ -263,16 +272,39 @@ def _forward(fit, holdout, baseline, current, candidates, steps, first_step, pro
             if passed:
                 accepted = effect
                 break
+        if accepted is None and holdout is not None:
+            accepted = _joint_pass(fit, holdout, current, trials, record)
         steps.append({"tried": record, "accepted": accepted, "dropped": []})
         if accepted is None:
             break
         current = trials[accepted]
         remaining.remove(accepted)
-        current, dropped = _backward(fit, baseline, current, accepted, s.bic_margin)
+        current, dropped = _backward(fit, holdout, baseline, current, accepted, s.bic_margin)
         if dropped:
             steps[-1]["dropped"] = dropped
             remaining += [e for e in dropped if e not in remaining]
     return current
+
+
+def _joint_pass(fit, holdout, current, trials, record):
+    """The deterministic effect that the joint criterion (:func:`joint_gain`) accepts, or None.
+
+    Tried after no effect passes the fit-run BIC and holdout checks: an
+    effect qualifies when its joint BIC change is below ``-bic_margin``, and
+    each run on its own points the same way (the fit run's ``-2 log L``
+    drops and its shape replicates on the holdout, :func:`holdout_gain`);
+    the lowest joint BIC wins.
+    """
+    s = fit.settings
+    best, best_gain = None, -s.bic_margin
+    for effect, model in trials.items():
+        if effect not in DETERMINISTIC or model.deviance >= current.deviance:
+            continue
+        gain = joint_gain(fit, holdout, current, effect)
+        record[effect]["delta_joint_bic"] = gain
+        if gain < best_gain and holdout_gain(holdout, current, model, effect) < 0.0:
+            best, best_gain = effect, gain
+    return best
 
 
 def holdout_gain(problem: Problem, current: Fitted, model: Fitted, effect: str) -> float:
@@ -368,13 +400,15 @@ def _earns(problem, baseline, model, effect, margin):
     return _refit(problem, baseline, order, spec, model.noise).bic > model.bic + margin
 
 
-def _backward(problem: Problem, baseline: Fitted, current: Fitted, added: str, margin: float):
+def _backward(problem: Problem, holdout: Problem | None, baseline: Fitted, current: Fitted, added: str, margin: float):
     """Drop earlier effects that the newly `added` one made redundant.
 
     An effect selected early as a stand-in (a random walk absorbing a
     warm-up and an interference before either was modelled) no longer earns
     its BIC margin once the real cause is in; it is removed (stepwise
-    selection) and may be chosen again later.
+    selection) and may be chosen again later. With a holdout, a
+    deterministic effect that still earns the margin on the joint BIC of
+    both runs (:func:`joint_gain`) stays.
     """
     dropped = []
     changed = True
@@ -386,7 +420,9 @@ def _backward(problem: Problem, baseline: Fitted, current: Fitted, added: str, m
             order = tuple(e for e in current.order if e != effect)
             spec = {k: v for k, v in current.spec.items() if k != effect}
             smaller = _refit(problem, baseline, order, spec, current.noise)
-            if smaller.bic < current.bic + margin:
+            if smaller.bic < current.bic + margin and not (
+                holdout is not None and effect in DETERMINISTIC and joint_gain(problem, holdout, smaller, effect) < -margin
+            ):
                 current, changed = smaller, True
                 dropped.append(effect)
                 break
@@ -406,37 +442,24 @@ def _refit(problem: Problem, baseline: Fitted, order: tuple, spec: dict, noise: 
     return Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
 
 
-def _best_nonlinear(problem: Problem, current: Fitted, effect: str) -> dict:
+def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_problems=()) -> dict:
     """Grid search (then bounded refinement in log scale) of the effect's nonlinear parameter.
 
-    The noise is held at the current model's; the other columns are block-averaged once.
+    The noise is held at the current model's; the other columns are
+    block-averaged once. With `others_problems` (``(problem, model)`` pairs:
+    the holdout with its own noise, in the joint criterion of
+    :func:`joint_gain`) the deviance is summed over the runs, the per-run
+    columns separate and the rest shared.
     """
     s = problem.settings
     run = problem.run
     if not _NONLINEAR.get(effect):
         return {}
-    w = problem.basis.whitener(current.noise)
     length_s = run.n_blocks * run.block_s
-    others = {k: v for k, v in current.spec.items() if k != effect}
-    X, names = design(run, others, problem.poly_degree, problem.scale)
-    if effect == "thermal_lag":
-        keep = [i for i, n in enumerate(names) if not n.startswith("temperature^")]
-        X = X[:, keep]
-    # Whitening is linear: whiten the fixed columns and y once, then only the candidate's.
-    base_w = w.whiten(block_means(X, run.n_per_block))
-    y_w = w.whiten(problem.y)
-    constant = w.logdet + problem.y.size * np.log(2.0 * np.pi)
+    parts = [_JointPart(problem, current, effect)] + [_JointPart(p, m, effect) for p, m in others_problems]
 
     def deviance(params):
-        if effect == "periodic":
-            cols = periodic_block_means(run, params["period_s"])
-        else:
-            full, _ = effect_columns(run, effect, params, problem.poly_degree, problem.scale)
-            cols = block_means(full, run.n_per_block)
-        Xw = np.hstack([base_w, w.whiten(cols)])
-        beta, *_ = linalg.lstsq(Xw, y_w, cond=1e-12, lapack_driver="gelsy", check_finite=False)
-        r = y_w - Xw @ beta
-        return constant + float(r @ r)
+        return _joint_deviance(parts, params, effect)[0]
 
     if effect == "hysteresis":
         grid = [float(v) for v in s.hysteresis_deadband_c]
@@ -461,6 +484,88 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str) -> dict:
         if best.fun < values[i]:
             return {key: float(np.exp(best.x))}
     return {key: float(grid[i])}
+
+
+class _JointPart:
+    """One run's whitened block means and fixed columns for a candidate `effect`."""
+
+    def __init__(self, problem: Problem, current: Fitted, effect: str):
+        run = problem.run
+        self.problem = problem
+        self.whitener = problem.basis.whitener(current.noise)
+        others = {k: v for k, v in current.spec.items() if k != effect}
+        X, names = design(run, others, problem.poly_degree, problem.scale)
+        if effect == "thermal_lag":
+            keep = [i for i, n in enumerate(names) if not n.startswith("temperature^")]
+            X, names = X[:, keep], [names[i] for i in keep]
+        # Whitening is linear: whiten the fixed columns and y once, then only the candidate's.
+        self.base_w = self.whitener.whiten(block_means(X, run.n_per_block))
+        self.base_names = names
+        self.y_w = self.whitener.whiten(problem.y)
+        self.constant = self.whitener.logdet + problem.y.size * np.log(2.0 * np.pi)
+
+    def candidate(self, effect, params):
+        run, p = self.problem.run, self.problem
+        if effect is None:
+            return np.empty((self.y_w.size, 0)), []
+        if effect == "periodic":
+            return self.whitener.whiten(periodic_block_means(run, params["period_s"])), ["periodic_sin", "periodic_cos"]
+        full, names = effect_columns(run, effect, params, p.poly_degree, p.scale)
+        return self.whitener.whiten(block_means(full, run.n_per_block)), names
+
+
+def _joint_deviance(parts, params, effect):
+    """``-2 log L`` summed over runs: shared coefficients, per-run :data:`PER_RUN` columns.
+
+    Returns the deviance and the number of blocks.
+    """
+    blocks, ys, constant = [], [], 0.0
+    for part in parts:
+        cols, names = part.candidate(effect, params)
+        X = np.hstack([part.base_w, cols])
+        names = part.base_names + names
+        blocks.append((X, np.array([n in PER_RUN for n in names])))
+        ys.append(part.y_w)
+        constant += part.constant
+    if len(parts) == 1:
+        X = blocks[0][0]
+    else:
+        free = blocks[0][1]
+        shared = np.vstack([X[:, ~free] for X, _ in blocks])
+        per_run = linalg.block_diag(*[X[:, free] for X, _ in blocks])
+        X = np.hstack([shared, per_run])
+    y = np.concatenate(ys)
+    beta, *_ = linalg.lstsq(X, y, cond=1e-12, lapack_driver="gelsy", check_finite=False)
+    r = y - X @ beta
+    return constant + float(r @ r), y.size
+
+
+def joint_gain(fit: Problem, holdout: Problem, current: Fitted, effect: str) -> float:
+    """Change of the joint BIC of fit and holdout from `current` to `current` + deterministic `effect`.
+
+    The two runs are one gyro with two noise realisations: their
+    log-likelihoods add, with the deterministic coefficients (temperature
+    polynomial, effects) shared, the per-run columns (:data:`PER_RUN`)
+    separate and each run's noise terms those of `current` fitted on that
+    run (one realisation of a random walk can read larger). A random walk
+    does not repeat between runs, a deterministic effect does, so the sum
+    detects an effect that one run's wander hides. The effect's nonlinear
+    parameter is fitted on the sum; the change is
+    ``Delta(-2 log L) + k ln(n_fit + n_holdout)``.
+
+    The held-out gap of a model selected this way is no longer independent
+    of the selection (its parameters are still fitted on the fit run only).
+    """
+    stochastic = ("arw",) + tuple(e for e in current.order if e not in DETERMINISTIC)
+    Xb, _ = holdout.design_blocks(current.spec)
+    noise, _, _ = fit_noise(holdout.y, Xb, holdout.basis, current.noise, stochastic)
+    on_holdout = dataclasses.replace(current, noise=noise)
+    parts_c = [_JointPart(fit, current, None), _JointPart(holdout, on_holdout, None)]
+    dev_c, n = _joint_deviance(parts_c, None, None)
+    params = _best_nonlinear(fit, current, effect, ((holdout, on_holdout),))
+    parts = [_JointPart(fit, current, effect), _JointPart(holdout, on_holdout, effect)]
+    dev_m, _ = _joint_deviance(parts, params, effect)
+    return dev_m - dev_c + N_PARAMS[effect] * np.log(n)
 
 
 def sample_arw(run: Run) -> float:
