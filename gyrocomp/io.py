@@ -678,11 +678,9 @@ def _own(values: np.ndarray, owned: bool) -> np.ndarray:
     while isinstance(base.base, np.ndarray):
         base = base.base
     if owned and base.size == values.size:
-        try:
+        with contextlib.suppress(ValueError):  # memory numpy may not make writable: copy below
             values.setflags(write=True)
             return values
-        except ValueError:
-            pass
     return values.copy()
 
 
