@@ -355,9 +355,9 @@ def write_report(
     series, inputs = [], []
     for path in recordings:
         rec = io.read_recording(path, spec, min_samples=3, resample=resample, usecols=usecols)
-        if column not in rec.data:
-            raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(map(str, rec.data.columns))}")
-        series.append(analyse(rec.data[column].to_numpy(), rec.fs_hz, taus=taus, name=Path(rec.name).name, column=column, settings=settings))
+        if column not in rec.columns:
+            raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
+        series.append(analyse(rec.column(column), rec.fs_hz, taus=taus, name=Path(rec.name).name, column=column, settings=settings))
         inputs.append(rec.input_record())
         del rec
     resolved = {**settings_dict(settings), "taus": taus or settings.taus, "column": column}

@@ -27,13 +27,15 @@ import os
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 
 from gyrocomp import __version__
 from gyrocomp.errors import InputError, SchemaError
+
+if TYPE_CHECKING:  # pandas is imported where a function needs it: the Parquet path of a recording never does
+    import pandas as pd
 
 __all__ = [
     "ColumnSpec",
@@ -99,46 +101,102 @@ class ColumnSpec:
                 )
 
 
-@dataclasses.dataclass
 class Recording:
     """A validated recording.
 
-    Attributes
+    Parameters
     ----------
-    data : pandas.DataFrame
+    data : pandas.DataFrame or mapping of str to numpy.ndarray
         ``time`` [s] (strictly increasing, uniform within the tolerance),
         ``rate`` [deg/s], ``temperature`` [degC] when present, and any
-        further numeric columns of the file unchanged.
+        further numeric columns of the file unchanged, as a frame or as
+        one 1-D array per column (kept as given, not copied).
     name : str
         The file's name (``"-"`` for standard input), used in messages.
     sha256 : str
         SHA-256 of the file's bytes.
     fs_hz : float
         Sample rate, from the median sampling interval.
-    metadata : dict
+    metadata : dict, optional
         The ``gyrocomp`` metadata of a Parquet file written by this tool
         (the simulator stores its truth there), else empty.
+
+    Notes
+    -----
+    A recording built from arrays makes its :attr:`data` frame (and
+    imports pandas) only when asked; from then on the frame is the
+    recording's content, so changes made through it are what
+    :meth:`column` and the properties return.
     """
 
-    data: pd.DataFrame
-    name: str
-    sha256: str
-    fs_hz: float
-    metadata: dict = dataclasses.field(default_factory=dict)
+    def __init__(
+        self,
+        data: pd.DataFrame | Mapping[str, np.ndarray],
+        name: str,
+        sha256: str,
+        fs_hz: float,
+        metadata: dict | None = None,
+    ):
+        self._frame = None
+        self._arrays = None
+        if isinstance(data, Mapping):
+            self._arrays = dict(data)
+        else:
+            self._frame = data
+        self.name = name
+        self.sha256 = sha256
+        self.fs_hz = fs_hz
+        self.metadata = {} if metadata is None else metadata
+
+    def __repr__(self) -> str:
+        return f"Recording(name={self.name!r}, columns={self.columns!r}, fs_hz={self.fs_hz!r})"
+
+    @property
+    def data(self) -> pd.DataFrame:
+        """The columns as a pandas DataFrame (built once, sharing the arrays' memory)."""
+        if self._frame is None:
+            import pandas as pd
+
+            self._frame = pd.DataFrame(self._arrays, copy=False)  # one block per column: no 2-D stacking copy
+            self._arrays = None
+        return self._frame
+
+    @data.setter
+    def data(self, frame: pd.DataFrame) -> None:
+        self._frame, self._arrays = frame, None
+
+    @property
+    def columns(self) -> list[str]:
+        """Column names, in order."""
+        if self._frame is not None:
+            return [str(c) for c in self._frame.columns]
+        return list(self._arrays)
+
+    def column(self, name: str) -> np.ndarray:
+        """One column as a NumPy array (a view, not a copy, where possible).
+
+        Raises
+        ------
+        KeyError
+            No such column.
+        """
+        if self._frame is not None:
+            return self._frame[name].to_numpy()
+        return self._arrays[name]
 
     @property
     def time_s(self) -> np.ndarray:
-        return self.data["time"].to_numpy()
+        return self.column("time")
 
     @property
     def rate_dps(self) -> np.ndarray:
-        return self.data["rate"].to_numpy()
+        return self.column("rate")
 
     @property
     def temperature_c(self) -> np.ndarray | None:
-        if "temperature" not in self.data:
+        if "temperature" not in self.columns:
             return None
-        return self.data["temperature"].to_numpy()
+        return self.column("temperature")
 
     def input_record(self) -> dict:
         """The ``inputs`` entry of an artefact header for this recording."""
@@ -204,7 +262,8 @@ def read_recording(
             frame = _parse_csv(name, source, usecols=wanted)
             where = "line"
             first = 2  # line 1 is the header
-        if wanted is None or all(c in frame.columns for c in wanted):
+        have = frame if isinstance(frame, dict) else frame.columns
+        if wanted is None or all(c in have for c in wanted):
             break
         wanted = None  # a column is missing: read them all for the error message
     del source
@@ -224,7 +283,7 @@ def read_recording(
 
 
 def recording_from_frame(
-    frame: pd.DataFrame,
+    frame: pd.DataFrame | Mapping[str, np.ndarray],
     *,
     name: str = "<table>",
     sha256: str | None = None,
@@ -239,6 +298,8 @@ def recording_from_frame(
 ) -> Recording:
     """Validate an in-memory table as a recording (see :func:`read_recording`).
 
+    `frame` is a pandas DataFrame or a mapping of column name to 1-D
+    integer or float NumPy array (validated without importing pandas).
     `sha256` defaults to the hash of the table's CSV form. Time and rate are
     copies (the private `_owned` says `frame` is a throw-away of
     :func:`read_recording`, whose own columns are then reused).
@@ -248,19 +309,22 @@ def recording_from_frame(
     def locate(i: int) -> str:
         return f"{name} {where} {int(i) + first}"
 
-    if len(frame) == 0:
+    arrays = isinstance(frame, Mapping)
+    names = list(frame) if arrays else list(frame.columns)
+    n_rows = (len(next(iter(frame.values()))) if frame else 0) if arrays else len(frame)
+    if n_rows == 0:
         raise InputError(f"{name}: has a header but no data rows")
     wanted = {"time": columns.time, "rate": columns.rate}
-    if require_temperature or columns.temperature in frame.columns:
+    if require_temperature or columns.temperature in names:
         wanted["temperature"] = columns.temperature
-    missing = [src for src in wanted.values() if src not in frame.columns]
+    missing = [src for src in wanted.values() if src not in names]
     if missing:
         hint = ""
         if "temperature" in wanted and wanted["temperature"] in missing:
             hint = " (map it with --temp-col)"
         raise InputError(
             f"{name}: missing column {', '.join(repr(m) for m in missing)}{hint}; "
-            f"the file has {', '.join(repr(str(c)) for c in frame.columns)}"
+            f"the file has {', '.join(repr(str(c)) for c in names)}"
         )
     out = {}
     for key, src in wanted.items():
@@ -270,11 +334,11 @@ def recording_from_frame(
         out[key] = _own(out[key], _owned) if factor == 1.0 else out[key] * factor
     if "temperature" in out and columns.temperature_unit == "K":
         out["temperature"] = out["temperature"] - 273.15
-    for extra in frame.columns:
+    for extra in names:
         if extra not in wanted.values() and extra not in out:
-            col = pd.to_numeric(frame[extra], errors="coerce")
-            if col.notna().all():
-                out[str(extra)] = col.to_numpy(dtype=float)
+            col = _numeric_extra(frame[extra])
+            if col is not None:
+                out[str(extra)] = col
     if "temperature" in out:
         _check_temperature(out["temperature"], columns.temperature, locate)
     n = len(out["time"])
@@ -307,11 +371,13 @@ def recording_from_frame(
                 )
             out = _resample(out, nominal)
     del dt
-    data = pd.DataFrame(out, copy=False)  # one block per column: no 2-D stacking copy
     if sha256 is None:
-        sha256 = hashlib.sha256(frame.to_csv(index=False).encode()).hexdigest()
+        import pandas as pd
+
+        table = pd.DataFrame(frame, copy=False) if arrays else frame
+        sha256 = hashlib.sha256(table.to_csv(index=False).encode()).hexdigest()
     return Recording(
-        data=data,
+        data=out,
         name=name,
         sha256=sha256,
         fs_hz=1.0 / nominal,
@@ -549,6 +615,8 @@ def _kind(name: str) -> str:
 
 
 def _parse_csv(name: str, source: str | bytes, usecols: Sequence[str] | None = None) -> pd.DataFrame:
+    import pandas as pd
+
     if isinstance(source, bytes):
         source = _stdio.BytesIO(source)
     keep = None if usecols is None else set(usecols).__contains__
@@ -564,13 +632,13 @@ def _parse_csv(name: str, source: str | bytes, usecols: Sequence[str] | None = N
 
 def _parse_parquet(
     name: str, source: str | bytes, usecols: Sequence[str] | None = None, direct: bool = False
-) -> tuple[pd.DataFrame, dict]:
-    """Frame and gyrocomp metadata of a Parquet file.
+) -> tuple[pd.DataFrame | dict[str, np.ndarray], dict]:
+    """Frame (or, on the direct path, arrays) and gyrocomp metadata of a Parquet file.
 
     `usecols` reads only those of the file's columns. `direct` (a file, for
     :func:`read_recording`) decodes null-free numeric columns row group by
     row group straight into NumPy arrays (:func:`_parquet_frame`), without
-    the whole Arrow table and pandas' consolidating copy.
+    the whole Arrow table, pandas' consolidating copy or pandas at all.
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -607,8 +675,8 @@ def _gyrocomp_header(name: str, meta: dict | None) -> dict:
         raise InputError(f"{name}: corrupted gyrocomp metadata") from None
 
 
-def _parquet_frame(parquet, usecols: Sequence[str] | None) -> pd.DataFrame | None:
-    """What ``read_table(columns=usecols).to_pandas()`` gives a recording, or None.
+def _parquet_frame(parquet, usecols: Sequence[str] | None) -> dict[str, np.ndarray] | None:
+    """What ``read_table(columns=usecols).to_pandas()`` gives a recording, as arrays, or None.
 
     Each (wanted) column is allocated once as a NumPy array and filled row
     group by row group, so only one row group is ever held by Arrow. A
@@ -640,30 +708,49 @@ def _parquet_frame(parquet, usecols: Sequence[str] | None) -> pd.DataFrame | Non
             if column.null_count:
                 return None
             at = start
-            for chunk in column.chunks:
-                arrays[c][at : at + len(chunk)] = chunk.to_numpy(zero_copy_only=True)
+            dtype = arrays[c].dtype
+            for chunk in column.chunks:  # the data buffer as it is (Array.to_numpy would import pandas)
+                values = np.frombuffer(chunk.buffers()[1], dtype=dtype, count=len(chunk), offset=chunk.offset * dtype.itemsize)
+                arrays[c][at : at + len(chunk)] = values
                 at += len(chunk)
         start += part.num_rows
-    return pd.DataFrame(arrays, copy=False)
+    return arrays
 
 
-def _numeric_column(series: pd.Series, src: str, locate) -> np.ndarray:
-    if series.dtype == object or pd.api.types.is_string_dtype(series.dtype):
-        values = pd.to_numeric(series, errors="coerce")
-        bad = values.isna() & series.notna()
-        if bad.any():
-            i = int(np.flatnonzero(bad.to_numpy())[0])
-            raise InputError(f"{locate(i)}: `{src}` = {series.iloc[i]!r} is not a number")
-        series = values
-    if not pd.api.types.is_numeric_dtype(series.dtype) or pd.api.types.is_bool_dtype(series.dtype):
-        raise InputError(f"{locate(0)}: `{src}` is not numeric (type {series.dtype})")
-    values = series.to_numpy(dtype=float)
+def _numeric_column(series: pd.Series | np.ndarray, src: str, locate) -> np.ndarray:
+    """A column as finite float64 values; a NumPy column must be integer or float."""
+    if isinstance(series, np.ndarray):
+        values = series.astype(float, copy=False)
+    else:
+        import pandas as pd
+
+        if series.dtype == object or pd.api.types.is_string_dtype(series.dtype):
+            values = pd.to_numeric(series, errors="coerce")
+            bad = values.isna() & series.notna()
+            if bad.any():
+                i = int(np.flatnonzero(bad.to_numpy())[0])
+                raise InputError(f"{locate(i)}: `{src}` = {series.iloc[i]!r} is not a number")
+            series = values
+        if not pd.api.types.is_numeric_dtype(series.dtype) or pd.api.types.is_bool_dtype(series.dtype):
+            raise InputError(f"{locate(0)}: `{src}` is not numeric (type {series.dtype})")
+        values = series.to_numpy(dtype=float)
     finite = np.isfinite(values)
     if not finite.all():
         i = int(np.flatnonzero(~finite)[0])
         what = "missing or NaN" if np.isnan(values[i]) else f"{float(values[i])!r}"
         raise InputError(f"{locate(i)}: `{src}` is {what}")
     return values
+
+
+def _numeric_extra(series: pd.Series | np.ndarray) -> np.ndarray | None:
+    """A further column as float64 when every cell is a number (infinity included), else None."""
+    if isinstance(series, np.ndarray):
+        values = series.astype(float, copy=False)
+        return None if np.isnan(values).any() else values
+    import pandas as pd
+
+    col = pd.to_numeric(series, errors="coerce")
+    return col.to_numpy(dtype=float) if col.notna().all() else None
 
 
 def _own(values: np.ndarray, owned: bool) -> np.ndarray:

@@ -286,8 +286,34 @@ def test_parquet_recording_equals_pandas_reading(tmp_path, with_nulls):
     expected = io.recording_from_frame(pd.read_parquet(path), sha256=rec.sha256, name=rec.name)
     pd.testing.assert_frame_equal(rec.data, expected.data)
     assert list(rec.data.columns) == (["time", "rate"] if with_nulls else ["time", "rate", "aux"])
+    np.testing.assert_array_equal(rec.column("time"), t)
     rec.data.loc[0, "rate"] = 5.0  # the recording's columns are writable
     assert rec.data["rate"].iloc[0] == 5.0
+    assert rec.rate_dps[0] == 5.0  # once built, the frame is the recording's content
+
+
+def test_allan_on_parquet_never_imports_pandas(tmp_path):
+    """`gyrocomp allan` on a Parquet recording reads and analyses it without pandas (0.35 s of import)."""
+    import subprocess
+    import sys
+
+    t = np.arange(3000) / 10.0
+    frame = pd.DataFrame({"time": t, "rate": _random_rate(len(t), 3), "temperature": 25.0 + 0 * t})
+    frame.to_parquet(tmp_path / "rec.parquet", row_group_size=1000)  # with pandas' own metadata
+    script = (
+        "import runpy, sys\n"
+        "sys.argv = ['gyrocomp', '--quiet', 'allan', sys.argv[1], '--out', sys.argv[2]]\n"
+        "try:\n    runpy.run_module('gyrocomp', run_name='__main__')\n"
+        "except SystemExit as exit:\n    assert not exit.code, exit.code\n"
+        "print('PANDAS', sorted(m for m in sys.modules if m.split('.')[0] == 'pandas'))\n"
+    )
+    out = tmp_path / "allan.json"
+    proc = subprocess.run([sys.executable, "-c", script, str(tmp_path / "rec.parquet"), str(out)], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.splitlines()[-1] == "PANDAS []"
+    (series,) = json.loads(out.read_text())["series"]
+    ref = al.analyse(frame["rate"].to_numpy(), 10.0, taus="octave")
+    assert_allclose(series["adev"], ref.adev, rtol=1e-12)
 
 
 @pytest.mark.parametrize("d", [0, 1, 2])
