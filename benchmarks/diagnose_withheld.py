@@ -29,17 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrocomp.sim import EFFECTS  # the vocabulary of DESIGN.md, in report order
+
 HERE = Path(__file__).resolve().parent
-EFFECTS = (
-    "thermal_lag",
-    "temp_rate",
-    "hysteresis",
-    "warmup",
-    "rate_ramp",
-    "periodic",
-    "bias_instability",
-    "rate_random_walk",
-)
 PROFILES = ("oven-paper", "oven-reverse")
 RATES_HZ = (1.0, 2.0)
 DURATION_S = 8 * 3600.0

@@ -32,6 +32,7 @@ import dataclasses
 import numpy as np
 
 from gyrocomp.sim import effects as shapes
+from gyrocomp.sim.model import EFFECTS  # the vocabulary of DESIGN.md, in report order
 
 __all__ = [
     "EFFECTS",
@@ -47,10 +48,10 @@ __all__ = [
     "effect_params",
 ]
 
-DETERMINISTIC = ("thermal_lag", "temp_rate", "hysteresis", "warmup", "rate_ramp", "periodic")
 STOCHASTIC = ("bias_instability", "rate_random_walk")
-EFFECTS = DETERMINISTIC + STOCHASTIC
-"""The vocabulary of DESIGN.md, in the order of :data:`gyrocomp.sim.model.EFFECTS`."""
+"""Effects that enter the likelihood as covariance terms."""
+DETERMINISTIC = tuple(e for e in EFFECTS if e not in STOCHASTIC)
+"""Effects that enter as regressors on the rate."""
 
 NEEDS_TEMPERATURE = ("thermal_lag", "temp_rate", "hysteresis")
 
