@@ -41,7 +41,7 @@ from gyrocomp.diagnose.effects import EFFECTS, NEEDS_TEMPERATURE, Run, Temperatu
 from gyrocomp.diagnose.select import Fitted, Problem, greedy, holdout_fit, residual_of, sample_arw
 from gyrocomp.errors import InputError
 
-__all__ = ["DiagnoseSettings", "get_config", "diagnose", "SCHEMA", "EFFECTS"]
+__all__ = ["DiagnoseSettings", "get_config", "diagnose", "problems", "SCHEMA", "EFFECTS"]
 
 SCHEMA = "gyrocomp.diagnosis"
 
@@ -126,22 +126,7 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
         raise InputError(f"start effects {unknown}: not in the vocabulary {', '.join(EFFECTS)}")
     if holdout is not None and (fit.temperature_c is None) != (holdout.temperature_c is None):
         raise InputError(f"{holdout.name}: temperature column present in only one of the fit and holdout recordings")
-    has_temp = fit.temperature_c is not None
-    skipped = {}
-    if not has_temp:
-        reason = "no temperature column: temperature polynomial and temperature effects skipped"
-        skipped = {e: reason for e in NEEDS_TEMPERATURE}
-    else:
-        span = float(np.ptp(fit.temperature_c))
-        if span < s.min_temperature_span_c:
-            reason = f"temperature spans {span:.2f} degC < {s.min_temperature_span_c} degC: temperature effects not identifiable"
-            skipped = {e: reason for e in NEEDS_TEMPERATURE}
-    use_temp = has_temp and not skipped
-    degree = s.poly_degree if use_temp else 0
-    scale = TemperatureScale.of(fit.temperature_c) if use_temp else None
-    block_s = max(s.block_s, (len(fit.data) / fit.fs_hz) / s.max_blocks)
-    fit_p = Problem(_run(fit, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree)
-    hold_p = Problem(_run(holdout, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree) if holdout is not None else None
+    fit_p, hold_p, skipped = problems(fit, holdout, s)
     candidates = [e for e in EFFECTS if e not in skipped and e not in start_effects]
     with threadpool_limits(limits=1, user_api="blas"):
         start = _start_model(fit_p, start_effects)
@@ -185,11 +170,46 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
     }
 
 
+def problems(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings()):
+    """The fit and holdout recordings prepared for the likelihood.
+
+    The temperature effects are skipped without a temperature column or when
+    the fit run's temperature spans less than ``min_temperature_span_c``;
+    blocks are ``block_s`` long, or longer so that a run has at most
+    ``max_blocks`` of them.
+
+    Returns
+    -------
+    fit_p : Problem
+    hold_p : Problem or None
+    skipped : dict
+        ``{effect: reason}`` for the effects that cannot be diagnosed.
+    """
+    s = settings
+    has_temp = fit.temperature_c is not None
+    skipped = {}
+    if not has_temp:
+        reason = "no temperature column: temperature polynomial and temperature effects skipped"
+        skipped = {e: reason for e in NEEDS_TEMPERATURE}
+    else:
+        span = float(np.ptp(fit.temperature_c))
+        if span < s.min_temperature_span_c:
+            reason = f"temperature spans {span:.2f} degC < {s.min_temperature_span_c} degC: temperature effects not identifiable"
+            skipped = {e: reason for e in NEEDS_TEMPERATURE}
+    use_temp = has_temp and not skipped
+    degree = s.poly_degree if use_temp else 0
+    scale = TemperatureScale.of(fit.temperature_c) if use_temp else None
+    block_s = max(s.block_s, (fit.time_s.size / fit.fs_hz) / s.max_blocks)
+    fit_p = Problem(_run(fit, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree)
+    hold_p = Problem(_run(holdout, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree) if holdout is not None else None
+    return fit_p, hold_p, skipped
+
+
 def _run(rec, block_s, use_temp, smooth_s) -> Run:
     n_per = max(1, int(round(block_s * rec.fs_hz)))
-    if len(rec.data) // n_per < 16:
+    if rec.time_s.size // n_per < 16:
         raise InputError(
-            f"{rec.name}: {len(rec.data)} samples make {len(rec.data) // n_per} blocks of {block_s:g} s; "
+            f"{rec.name}: {rec.time_s.size} samples make {rec.time_s.size // n_per} blocks of {block_s:g} s; "
             "the diagnosis needs at least 16"
         )
     temperature = rec.temperature_c if use_temp else None
