@@ -13,7 +13,11 @@ measured temperature, white noise) on a fit recording, then
    for the baseline, for every candidate alone and for the selected model,
    on the fit and on the holdout recording;
 3. **where** -- breaks the residual down by regime, timescale and EMD
-   component (:mod:`gyrocomp.diagnose.localize`).
+   component (:mod:`gyrocomp.diagnose.localize`);
+4. **what it could have missed** -- for every candidate not selected, the
+   weakest amplitude an ideal detector would find beside the selected model
+   with probability ``detection_power``
+   (:func:`gyrocomp.diagnose.detectability.detection_limit`).
 
 The gap and the localization compare each residual with the model's noise
 terms, whose white level is the fit run's sample-level one
@@ -37,6 +41,7 @@ import numpy as np
 from gyrocomp.config import bind, load_config, settings_dict
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
+from gyrocomp.diagnose.detectability import detection_limit
 from gyrocomp.diagnose.effects import EFFECTS, NEEDS_TEMPERATURE, Run, TemperatureScale, effect_params
 from gyrocomp.diagnose.select import Fitted, Problem, greedy, holdout_fit, residual_of, sample_arw
 from gyrocomp.errors import InputError
@@ -55,6 +60,7 @@ class DiagnoseSettings:
     max_blocks: int = 720
     bic_margin: float = 10.0
     holdout_margin: float = 6.0
+    detection_power: float = 0.95
     max_effects: int = 8
     min_temperature_span_c: float = 2.0
     temp_rate_smooth_s: float = 60.0
@@ -79,6 +85,8 @@ class DiagnoseSettings:
                 raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be > 0")
         if not 0 <= self.poly_degree <= 3:
             raise InputError(f"diagnose.poly_degree = {self.poly_degree!r}: the baseline is at most cubic (0..3)")
+        if not 0.0 < self.detection_power < 1.0:
+            raise InputError(f"diagnose.detection_power = {self.detection_power!r} must be between 0 and 1")
         if self.max_blocks < 16:
             raise InputError(f"diagnose.max_blocks = {self.max_blocks!r} must be at least 16")
 
@@ -143,6 +151,13 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
                 "gap_holdout": g["holdout"]["total"] if hold_p is not None else None,
                 "delta_bic": model.bic - start.bic,
             }
+        runs = [fit_p] + ([hold_p] if hold_p is not None else [])
+        for effect, c in cand.items():
+            c["detection_limit"] = (
+                None
+                if effect in selected.order
+                else detection_limit(runs, selected, effect, first_step[effect].spec.get(effect, {}), s.bic_margin, s.detection_power)
+            )
         local = _localization(fit_p, hold_p, models, gaps, s, white)
     order = [e for e in selected.order if e not in start_effects]
     return {

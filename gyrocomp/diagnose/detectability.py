@@ -1,46 +1,60 @@
 """How strong an effect must be before `gyrocomp diagnose` can see it.
 
-The **evidence** of an effect in a run is the expected drop of ``-2 log L``
-of the block means (:mod:`gyrocomp.diagnose.likelihood`) when the effect is
-added to the model that lacks it, for an ideal detector that knows the
-effect's exact shape and the true noise covariance ``Sigma``:
+An **ideal detector** knows an effect's exact shape and the true noise
+covariance ``Sigma`` of the block means (:mod:`gyrocomp.diagnose.likelihood`)
+and compares the model with the effect to the closest model without it by
+the drop ``T`` of ``-2 log L``. The selection
+(:mod:`gyrocomp.diagnose.select`) keeps an effect of ``k`` parameters when
+that drop exceeds ``threshold = k ln n_blocks + bic_margin``. The
+**detection probability** ``P(T > threshold)`` of an effect is the figure
+here; the amplitude at which it reaches 0.95 is the **edge of
+detectability**: an effect weaker than that is missed by any method often
+enough that naming it would be luck. The withheld-effect benchmark draws its
+amplitudes from the edge up.
 
-* a deterministic effect whose block means are ``s``, beside nuisance
+* A deterministic effect whose block means are ``s``, beside nuisance
   columns ``X`` (per-run offset, temperature polynomial, the other
-  deterministic effects): the non-centrality of the likelihood-ratio
-  statistic,
+  deterministic effects): ``T`` is a non-central chi-square with one degree
+  of freedom and non-centrality (the **evidence**)
 
   .. math:: \\lambda = \\lVert (I - P_{WX}) W s \\rVert^2, \\quad W = \\Sigma^{-1/2},
 
-  with ``P_{WX}`` the projector on the whitened nuisance columns;
-* a noise term (``bias_instability``, ``rate_random_walk``): twice the
-  Kullback-Leibler divergence of the true block-mean distribution from the
-  closest one without that term (the other noise terms re-fitted), on the
-  contrasts orthogonal to ``X`` (the nuisance coefficients are not noise),
+  ``P_{WX}`` the projector on the whitened nuisance columns.
+* A noise term (``bias_instability``, ``rate_random_walk``), on the
+  contrasts orthogonal to ``X`` (the nuisance coefficients are not noise):
+  with ``mu_j`` the eigenvalues of ``Sigma_0^{-1} Sigma`` for the closest
+  ``Sigma_0`` without the term (the white level and the other noise term
+  re-fitted to minimise the Kullback-Leibler divergence),
 
-  .. math:: \\lambda = \\min_{\\Sigma_0} \\operatorname{tr}(\\Sigma_0^{-1}\\Sigma)
-            - m - \\ln\\det(\\Sigma_0^{-1}\\Sigma).
+  .. math:: T = \\sum_j (\\mu_j - 1) z_j^2 - \\ln \\mu_j, \\quad z_j \\sim N(0, 1),
 
-The selection (:mod:`gyrocomp.diagnose.select`) keeps an effect of ``k``
-parameters when ``-2 log L`` drops by more than
-``threshold = k ln n_blocks + bic_margin``. With a statistic
-``(Z + sqrt(lambda))^2``, ``Z ~ N(0, 1)``, an ideal detector crosses it with
-probability ``Phi(sqrt(lambda) - sqrt(threshold))``;
-:func:`edge_evidence` is the evidence it needs to do so with probability
-``power``. That is the **edge of detectability** the withheld-effect
-benchmark draws its amplitudes from: an effect weaker than it is missed by
-any method often enough that naming it would be luck.
+  whose mean, ``2 KL``, is the evidence. A random walk or flicker puts its
+  power in a few slow modes, so ``T`` spreads far wider than a non-central
+  chi-square of the same mean: a run's slow wander may happen to be small.
+
+Several runs of the same gyro add their ``T``.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from scipy import linalg, optimize, stats
 
-from gyrocomp.diagnose.effects import N_PARAMS, STOCHASTIC
+from gyrocomp.diagnose.effects import N_PARAMS, STOCHASTIC, effect_columns, polynomial_columns
 from gyrocomp.diagnose.likelihood import NoiseModel, block_means
 
-__all__ = ["threshold", "edge_evidence", "deterministic_evidence", "noise_evidence"]
+__all__ = [
+    "threshold",
+    "deterministic_evidence",
+    "noise_ratios",
+    "noise_evidence",
+    "deterministic_detection",
+    "noise_detection",
+    "edge_evidence",
+    "detection_limit",
+]
 
 
 def threshold(n_blocks, effect, bic_margin):
@@ -48,17 +62,8 @@ def threshold(n_blocks, effect, bic_margin):
     return N_PARAMS[effect] * np.log(n_blocks) + bic_margin
 
 
-def edge_evidence(n_blocks, effect, bic_margin, power=0.95):
-    """Evidence an ideal detector needs to cross :func:`threshold` with probability `power`.
-
-    ``(sqrt(threshold) + z_power)^2``; for one parameter, 720 blocks and a
-    margin of 10 this is 32.7 (``z_0.95 = 1.645``).
-    """
-    return float((np.sqrt(threshold(n_blocks, effect, bic_margin)) + stats.norm.ppf(power)) ** 2)
-
-
 def deterministic_evidence(problem, contribution_dps, spec, noise: NoiseModel) -> float:
-    """Evidence of a deterministic effect in one run.
+    """Evidence ``lambda`` of a deterministic effect in one run.
 
     Parameters
     ----------
@@ -76,8 +81,7 @@ def deterministic_evidence(problem, contribution_dps, spec, noise: NoiseModel) -
     Returns
     -------
     float
-        ``lambda`` (dimensionless; the ``-2 log L`` drop is ``lambda`` plus a
-        chi-square of the effect's parameters).
+        The non-centrality of the ``-2 log L`` drop (dimensionless).
     """
     w = problem.basis.whitener(noise)
     X, _ = problem.design_blocks(spec)
@@ -88,11 +92,8 @@ def deterministic_evidence(problem, contribution_dps, spec, noise: NoiseModel) -
     return float(r @ r)
 
 
-def noise_evidence(problem, spec, noise: NoiseModel, term: str) -> float:
-    """Evidence of the noise `term` (``bias_instability`` or ``rate_random_walk``) in one run.
-
-    The alternative keeps the white level and the other noise term of
-    `noise` (when present) free and is fitted to minimise the divergence.
+def noise_ratios(problem, spec, noise: NoiseModel, term: str) -> np.ndarray:
+    """Eigenvalues ``mu_j`` of ``Sigma_0^{-1} Sigma`` for the noise `term` in one run.
 
     Parameters
     ----------
@@ -102,13 +103,14 @@ def noise_evidence(problem, spec, noise: NoiseModel, term: str) -> float:
     noise : NoiseModel
         The true noise terms, `term` among them.
     term : str
+        ``bias_instability`` or ``rate_random_walk``.
 
     Returns
     -------
-    float
+    ndarray, shape (n_blocks - n_columns,)
     """
     if term not in STOCHASTIC or not getattr(noise, term):
-        raise ValueError(f"noise_evidence: {term!r} is not a noise term present in {noise}")
+        raise ValueError(f"noise_ratios: {term!r} is not a noise term present in {noise}")
     X, _ = problem.design_blocks(spec)
     q, _ = np.linalg.qr(X, mode="complete")
     contrasts = q[:, X.shape[1] :]
@@ -118,27 +120,139 @@ def noise_evidence(problem, spec, noise: NoiseModel, term: str) -> float:
         return contrasts.T @ c @ contrasts
 
     true = project(basis.covariance(noise))
-    chol_true = linalg.cholesky(true, lower=True, check_finite=False)
-    logdet_true = 2.0 * float(np.sum(np.log(np.diag(chol_true))))
     m = true.shape[0]
     other = [t for t in STOCHASTIC if t != term and getattr(noise, t)]
     if not other:
         # Sigma_0 = s^2 I on the contrasts: the divergence is least at s^2 = tr(Sigma) / m.
-        s2 = float(np.trace(true)) / m
-        return float(m * np.log(s2) - logdet_true)
-    name = other[0]
-    colored = project(basis.flicker if name == "bias_instability" else basis.random_walk)
-    white = float(np.mean(np.diag(project(basis.white))))
+        lam = linalg.eigvalsh(true, check_finite=False)
+        return lam / (np.sum(lam) / m)
+    # Sigma_0 = a I + b C shares the eigenvectors V of C (eigenvalues c): with
+    # d = diag(V' Sigma V) the divergence is sum(d / (a + b c) + ln(a + b c)) + const,
+    # O(m) per trial.
+    c, v = linalg.eigh(project(basis.flicker if other[0] == "bias_instability" else basis.random_walk), check_finite=False)
+    c = np.maximum(c, 0.0)
+    d = np.einsum("ij,ij->j", v, true @ v)
 
     def divergence(z):
-        sigma0 = np.exp(z[0]) * white * np.eye(m) + np.exp(z[1]) * colored
-        try:
-            chol0 = linalg.cholesky(sigma0, lower=True, check_finite=False)
-        except linalg.LinAlgError:
-            return np.inf
-        a = linalg.solve_triangular(chol0, chol_true, lower=True, check_finite=False)
-        return float(np.sum(a * a) - m - logdet_true + 2.0 * np.sum(np.log(np.diag(chol0))))
+        diag = np.exp(z[0]) / basis.block_s + np.exp(z[1]) * c
+        return float(np.sum(d / diag + np.log(diag)))
 
-    start = np.log([noise.arw**2, getattr(noise, name) ** 2])
-    best = optimize.minimize(divergence, start, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-3})
-    return float(best.fun)
+    start = np.log([noise.arw**2, getattr(noise, other[0]) ** 2])
+    best = optimize.minimize(divergence, start, method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-6})
+    sigma0 = (v * (np.exp(best.x[0]) / basis.block_s + np.exp(best.x[1]) * c)) @ v.T
+    return linalg.eigh(true, sigma0, eigvals_only=True, check_finite=False)
+
+
+def noise_evidence(ratios) -> float:
+    """Evidence of a noise term, ``sum(mu - 1 - ln mu)`` (twice the divergence), from :func:`noise_ratios`."""
+    mu = np.asarray(ratios, dtype=float)
+    return float(np.sum(mu - 1.0 - np.log(mu)))
+
+
+def deterministic_detection(evidence, threshold_value) -> float:
+    """``P(T > threshold)`` for a non-central chi-square ``T`` of one degree of freedom."""
+    return float(stats.ncx2.sf(threshold_value, 1, evidence))
+
+
+def noise_detection(ratios, threshold_value, draws=4000, seed=0) -> float:
+    """``P(T > threshold)`` for ``T = sum((mu - 1) z^2 - ln mu)``, by Monte Carlo.
+
+    Only the modes with ``|mu - 1| > 1e-3`` are drawn; the others add their
+    mean (``(mu - 1)^2 / 2`` to second order) and a negligible spread.
+    `draws` normal vectors from ``numpy.random.default_rng(seed)``: the
+    same ratios give the same probability, so a root finder sees a smooth
+    function of the amplitude (common random numbers).
+    """
+    mu = np.asarray(ratios, dtype=float)
+    strong = np.abs(mu - 1.0) > 1e-3
+    weak = mu[~strong]
+    base = float(np.sum(weak - 1.0 - np.log(weak)))
+    z = np.random.default_rng(seed).standard_normal((draws, int(strong.sum())))
+    t = (z * z) @ (mu[strong] - 1.0) - np.sum(np.log(mu[strong])) + base
+    return float(np.mean(t > threshold_value))
+
+
+def edge_evidence(threshold_value, power=0.95) -> float:
+    """The evidence a deterministic effect needs to be detected with probability `power`.
+
+    For one parameter, 720 blocks and a margin of 10 (threshold 16.6) it is 32.7.
+    """
+    return float(optimize.brentq(lambda lam: deterministic_detection(lam, threshold_value) - power, 0.0, 1e4 + 10 * threshold_value))
+
+
+def detection_limit(runs, model, effect, shape, bic_margin, power=0.95):
+    """The weakest `effect` an ideal detector finds with probability `power` beside `model`.
+
+    The upper limit a diagnosis that did not select `effect` puts on it: the
+    amplitude (thermal lag: the element time constant; noise terms: ``B``,
+    ``K``) at which, with `model`'s noise terms and deterministic effects as
+    they were fitted, the effect would cross the selection threshold with
+    probability `power` on the recordings `runs` together.
+
+    Parameters
+    ----------
+    runs : sequence of gyrocomp.diagnose.select.Problem
+        The fit run, then the holdout if any (its evidence is taken equal to
+        the fit run's: same gyro, same profile).
+    model : gyrocomp.diagnose.select.Fitted
+        The selected model.
+    effect : str
+    shape : dict
+        The effect's nonlinear parameter (``deadband_c``, ``tau_s`` of a
+        warm-up, ``period_s``), as fitted when the effect was tried.
+    bic_margin : float
+    power : float, default=0.95
+
+    Returns
+    -------
+    dict or None
+        ``{parameter: {"value", "unit"}}`` in the simulator's names, or None
+        when even the end of the search range would not be found.
+    """
+    fit = runs[0]
+    thr = threshold(len(runs) * fit.y.size, effect, bic_margin)
+    spec = {k: v for k, v in model.spec.items() if k != effect}
+    noise = model.noise
+    if effect in STOCHASTIC:
+        unit = {"bias_instability": np.sqrt(fit.run.block_s), "rate_random_walk": fit.run.block_s}[effect]
+
+        def shortfall(z):
+            trial = dataclasses.replace(noise, **{effect: noise.arw / unit * np.exp(z)})
+            return noise_detection(np.tile(noise_ratios(fit, spec, trial, effect), len(runs)), thr) - power
+
+        if shortfall(np.log(1e3)) < 0:
+            return None
+        value = noise.arw / unit * np.exp(optimize.brentq(shortfall, np.log(1e-3), np.log(1e3), xtol=0.01))
+        terms = dataclasses.replace(noise, **{effect: value}).datasheet_units()
+        key = "b_deg_per_h" if effect == "bias_instability" else "k_deg_per_h_per_sqrt_h"
+        return {key: terms[effect]}
+    target = edge_evidence(thr, power) / len(runs)
+    if effect == "thermal_lag":
+        plain, names = polynomial_columns(fit.run, None, fit.poly_degree, fit.scale)
+        beta = dict(zip(model.names, model.beta))
+        coefficients = np.array([beta[n] for n in names])
+
+        def lag_evidence(z):
+            lagged, _ = polynomial_columns(fit.run, float(np.exp(z)), fit.poly_degree, fit.scale)
+            return deterministic_evidence(fit, (lagged - plain) @ coefficients, spec, noise)
+
+        # Not monotonic: a very slow element barely moves, and a constant
+        # element temperature is absorbed by the offset. The limit is the
+        # first crossing on a log grid, refined.
+        grid = np.linspace(np.log(fit.run.block_s / 10.0), np.log(1e5), 25)
+        hits = np.flatnonzero(np.array([lag_evidence(z) for z in grid]) >= target)
+        if hits.size == 0:
+            return None
+        k = int(hits[0])
+        z = grid[0] if k == 0 else optimize.brentq(lambda z: np.log(lag_evidence(z) / target), grid[k - 1], grid[k], xtol=0.01)
+        return {"tau_s": {"value": float(np.exp(z)), "unit": "s"}}
+    columns, _ = effect_columns(fit.run, effect, shape, fit.poly_degree, fit.scale)
+    # A sinusoid's evidence depends on its phase: the mean over phases is that of sin and cos averaged.
+    unit = np.mean([deterministic_evidence(fit, c, spec, noise) for c in columns.T])
+    amplitude = float(np.sqrt(target / unit))
+    if effect == "temp_rate":
+        return {"coefficient_dps_per_c_per_s": {"value": amplitude, "unit": "deg/s per degC/s"}}
+    if effect == "rate_ramp":
+        # The column is time in hours: its coefficient is deg/s per hour.
+        return {"slope_dps_per_s": {"value": amplitude / 3600.0, "unit": "deg/s/s"}}
+    return {"amplitude_dps": {"value": amplitude, "unit": "deg/s"}}

@@ -46,7 +46,7 @@ import dataclasses
 import numpy as np
 from scipy import linalg, optimize
 
-__all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "profile_deviance", "fit_noise"]
+__all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "profile_deviance", "fit_noise", "fit_noise_runs"]
 
 FLICKER_AVAR = 2.0 * np.log(2.0) / np.pi
 """Allan variance of flicker noise per unit ``B^2`` (IEEE Std 952: 0.6643^2)."""
@@ -237,6 +237,32 @@ def fit_noise(y, X, basis: NoiseBasis, start: NoiseModel, free=("arw",)):
         s2 = max(float(np.mean((y - X @ beta) ** 2)), 1e-300)
         noise = NoiseModel(arw=float(np.sqrt(s2 * basis.block_s)))
         return noise, profile_deviance(y, X, basis.whitener(noise))[0], beta
+    noise, deviance, betas = fit_noise_runs([(y, X, basis)], start, free)
+    return noise, deviance, betas[0]
+
+
+def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
+    """Noise terms shared by several runs of one gyro, by maximum likelihood.
+
+    Each run keeps its own regression coefficients; the runs' ``-2 log L``
+    add (independent noise realisations of the same terms).
+
+    Parameters
+    ----------
+    runs : sequence of (y, X, basis)
+        Block means, regressors and covariance basis of each run.
+    start : NoiseModel
+    free : sequence of str
+        Terms whose log-variances are optimised (Nelder-Mead, from `start`).
+
+    Returns
+    -------
+    noise : NoiseModel
+    deviance : float
+        Summed ``-2 log L`` at the optimum.
+    betas : list of ndarray
+    """
+    names = tuple(free)
     x0 = np.array([np.log(max(getattr(start, name), 1e-30) ** 2) for name in names])
     x0 = np.maximum(x0, _LN_FLOOR + 5.0)
 
@@ -248,26 +274,34 @@ def fit_noise(y, X, basis: NoiseBasis, start: NoiseModel, free=("arw",)):
 
     rotated = {}
 
-    def objective(z):
-        w = basis.whitener(model(z))
+    def run_deviance(k, y, X, basis, noise):
+        w = basis.whitener(noise)
         if w.d is None:
             try:
                 return profile_deviance(y, X, w)[0]
             except linalg.LinAlgError:
                 return np.inf
         # Same eigenvectors for every noise model of this family: rotate once.
-        key = id(w.q)
+        key = (k, id(w.q))
         if key not in rotated:
             rotated[key] = (y, X) if w.q is None else (w.q.T @ y, w.q.T @ X)
         yq, Xq = rotated[key]
         return profile_deviance(yq, Xq, _Whitener(None, w.d))[0]
 
+    def objective(z):
+        noise = model(z)
+        return sum(run_deviance(k, y, X, basis, noise) for k, (y, X, basis) in enumerate(runs))
+
     best = optimize.minimize(
         objective, x0, method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 1e-2, "initial_simplex": _simplex(x0)}
     )
     noise = model(best.x)
-    deviance, beta = profile_deviance(y, X, basis.whitener(noise))
-    return noise, deviance, beta
+    deviance, betas = 0.0, []
+    for y, X, basis in runs:
+        dev, beta = profile_deviance(y, X, basis.whitener(noise))
+        deviance += dev
+        betas.append(beta)
+    return noise, deviance, betas
 
 
 def _simplex(x0, step=2.0):

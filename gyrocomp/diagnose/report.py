@@ -103,10 +103,23 @@ def to_markdown(report: dict) -> str:
     for name in ("baseline", "selected"):
         g = report["gap"][name]
         lines.append(f"| {name} | {_fmt(g['fit'])} | {_fmt(g['holdout'])} |")
-    lines += ["", "| candidate | gap fit | gap holdout | delta BIC | parameters |", "|---|---|---|---|---|"]
+    lines += [
+        "",
+        "| candidate | gap fit | gap holdout | delta BIC | parameters | detection limit |",
+        "|---|---|---|---|---|---|",
+    ]
     for effect, c in report["candidates"].items():
         params = ", ".join(f"{k} = {_fmt(v['value'])} {v['unit']}" for k, v in c["params"].items())
-        lines.append(f"| `{effect}` | {_fmt(c['gap_fit'])} | {_fmt(c['gap_holdout'])} | {_fmt(c['delta_bic'])} | {params} |")
+        lines.append(
+            f"| `{effect}` | {_fmt(c['gap_fit'])} | {_fmt(c['gap_holdout'])} | {_fmt(c['delta_bic'])} | {params} "
+            f"| {_limit(effect, c, sel)} |"
+        )
+    power = report.get("settings", {}).get("detection_power")
+    lines += [
+        "",
+        "Detection limit: for an effect not selected, the weakest amplitude (thermal lag: time constant) "
+        f"an ideal detector would find beside the selected model with probability {_fmt(power)}.",
+    ]
     if report.get("skipped"):
         lines += ["", "Skipped:"] + [f"- `{e}`: {why}" for e, why in report["skipped"].items()]
     loc = report["localization"].get("fit", {})
@@ -128,15 +141,25 @@ def summary_table(report: dict):
     sel = report["selected_effects"]
     title = "selected: " + (", ".join(sel) if sel else "none (baseline explains the recording)")
     table = Table(title=title)
-    for col in ("model / candidate", "gap fit", "gap holdout", "delta BIC"):
-        table.add_column(col, justify="right" if col != "model / candidate" else "left")
+    for col in ("model / candidate", "gap fit", "gap holdout", "delta BIC", "detection limit"):
+        table.add_column(col, justify="left" if col in ("model / candidate", "detection limit") else "right")
     for name in ("baseline", "selected"):
         g = report["gap"][name]
-        table.add_row(name, _fmt(g["fit"]), _fmt(g["holdout"]), "")
+        table.add_row(name, _fmt(g["fit"]), _fmt(g["holdout"]), "", "")
     for effect, c in report["candidates"].items():
         mark = " *" if effect in sel else ""
-        table.add_row(f"+ {effect}{mark}", _fmt(c["gap_fit"]), _fmt(c["gap_holdout"]), _fmt(c["delta_bic"]))
+        table.add_row(f"+ {effect}{mark}", _fmt(c["gap_fit"]), _fmt(c["gap_holdout"]), _fmt(c["delta_bic"]), _limit(effect, c, sel))
     return table
+
+
+def _limit(effect, candidate, selected):
+    """``>= value unit`` of a candidate's detection limit, ``selected`` or ``beyond range``."""
+    if effect in selected:
+        return "selected"
+    limit = candidate.get("detection_limit")
+    if not limit:
+        return "beyond search range"
+    return ", ".join(f"{k} >= {_fmt(v['value'])} {v['unit']}" for k, v in limit.items())
 
 
 def plot_gap(report: dict, path: str | os.PathLike) -> None:

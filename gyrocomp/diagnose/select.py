@@ -16,16 +16,20 @@ holdout recording, it lowers the holdout's ``-2 log L`` by more than
 `holdout_margin` (:func:`holdout_gain`: a noise term with its fitted value;
 a deterministic effect with its fitted shape, scaled on the holdout -- the
 check asks that the shape *replicate* in a run it never saw). Otherwise the
-next best effect is tried. When none passes and a holdout is given, a
-deterministic effect may still enter on the **joint** likelihood of both
-runs (:func:`joint_gain`: coefficients shared, offsets and noise
-realisations per run), which adds the evidence of the two runs: a random
-walk does not repeat between runs, a deterministic effect does. It must
-lower the joint BIC by more than `bic_margin`, lower the fit run's
-``-2 log L`` and replicate on the holdout (alpha > 0 below). Its parameters
-are still fitted on the fit run only, so the held-out gap stays a figure
-of parameters that never saw the holdout, though the holdout then took
-part in the selection. The selection stops when nothing passes. Adding a
+next best effect is tried. A deterministic effect that passes both checks
+still waits when a noise term of the same step passes the fit check and
+explains the holdout better (:func:`_noise_rival`: a sinusoid or a ramp
+fitted to one run's slowest flicker wander). When none passes and a
+holdout is given, an effect may still enter on the **joint** likelihood of
+both runs, which adds the evidence of the two: a deterministic effect with
+coefficients shared, offsets and noise realisations per run
+(:func:`joint_gain`; a random walk does not repeat between runs, a
+deterministic effect does), a noise term with its value shared
+(:func:`joint_noise_gain`). It must lower the joint BIC by more than
+`bic_margin` and each run must point the same way. Its parameters are
+still fitted on the fit run only, so the held-out gap stays a figure of
+parameters that never saw the holdout, though the holdout then took part in
+the selection. The selection stops when nothing passes. Adding a
 deterministic effect refits the nonlinear parameters of those already in
 (a warm-up fitted alone stretches its time constant over a ramp); a
 backward check drops effects that a newer one made redundant. With no
@@ -64,9 +68,20 @@ from gyrocomp.diagnose.effects import (
     effect_columns,
     periodic_block_means,
 )
-from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, fit_noise_runs, profile_deviance
 
-__all__ = ["Fitted", "Problem", "fit_baseline", "extend", "holdout_fit", "holdout_gain", "joint_gain", "greedy", "sample_arw"]
+__all__ = [
+    "Fitted",
+    "Problem",
+    "fit_baseline",
+    "extend",
+    "holdout_fit",
+    "holdout_gain",
+    "joint_gain",
+    "joint_noise_gain",
+    "greedy",
+    "sample_arw",
+]
 
 _NONLINEAR = {"thermal_lag": "tau_s", "hysteresis": "deadband_c", "warmup": "tau_s", "periodic": "period_s"}
 """The deterministic effects with a nonlinear parameter (grid-searched)."""
@@ -269,6 +284,11 @@ def _forward(fit, holdout, baseline, current, candidates, steps, first_step, pro
                 delta_hold = holdout_gain(holdout, current, model, effect)
                 passed = delta_hold < -s.holdout_margin
             record[effect] = {"delta_bic": delta_bic, "delta_holdout_deviance": delta_hold}
+            if passed and holdout is not None and effect in DETERMINISTIC:
+                rival = _noise_rival(fit, holdout, current, trials, effect)
+                if rival is not None:
+                    record[effect]["noise_explains_holdout_better"] = rival
+                    passed = False
             if passed:
                 accepted = effect
                 break
@@ -286,25 +306,86 @@ def _forward(fit, holdout, baseline, current, candidates, steps, first_step, pro
     return current
 
 
+def _noise_rival(fit, holdout, current, trials, effect):
+    """The noise term of this step that explains the holdout better than deterministic `effect`, or None.
+
+    Flicker or a random walk puts power at every slow frequency; within one
+    run, a sinusoid, a warm-up or a ramp fitted to the slowest wander can
+    beat it by BIC, and its shape (the phase of a sinusoid is re-estimated
+    per run) replicates on the holdout's own wander. On the holdout, though,
+    the noise term explains the new wander at every frequency while the
+    shape explains one: a noise trial that passes the fit run's BIC check
+    and gives the holdout a lower ``-2 log L`` (both models frozen, per-run
+    columns refitted) is preferred, and the shape waits for a later step,
+    where it is judged beside that noise term.
+    """
+    s = fit.settings
+    hold_effect = holdout_fit(holdout, trials[effect])[0]
+    best = None
+    for name, model in trials.items():
+        if name in DETERMINISTIC or model.bic - current.bic >= -s.bic_margin:
+            continue
+        dev = holdout_fit(holdout, model)[0]
+        if dev < hold_effect and (best is None or dev < best[1]):
+            best = (name, dev)
+    return None if best is None else best[0]
+
+
 def _joint_pass(fit, holdout, current, trials, record):
-    """The deterministic effect that the joint criterion (:func:`joint_gain`) accepts, or None.
+    """The effect that the joint criterion of both runs accepts, or None.
 
     Tried after no effect passes the fit-run BIC and holdout checks: an
-    effect qualifies when its joint BIC change is below ``-bic_margin``, and
-    each run on its own points the same way (the fit run's ``-2 log L``
-    drops and its shape replicates on the holdout, :func:`holdout_gain`);
-    the lowest joint BIC wins.
+    effect qualifies when its joint BIC change (:func:`joint_gain` for a
+    deterministic effect, :func:`joint_noise_gain` for a noise term) is
+    below ``-bic_margin`` and each run on its own points the same way (a
+    deterministic effect lowers the fit run's ``-2 log L`` and its shape
+    replicates on the holdout, :func:`holdout_gain`; a noise term lowers
+    both runs' ``-2 log L`` at its joint value); the lowest joint BIC wins.
     """
     s = fit.settings
     best, best_gain = None, -s.bic_margin
     for effect, model in trials.items():
-        if effect not in DETERMINISTIC or model.deviance >= current.deviance:
-            continue
-        gain = joint_gain(fit, holdout, current, effect)
+        if effect in DETERMINISTIC:
+            if model.deviance >= current.deviance:
+                continue
+            gain = joint_gain(fit, holdout, current, effect)
+            agrees = holdout_gain(holdout, current, model, effect) < 0.0
+        else:
+            gain, per_run = joint_noise_gain(fit, holdout, current, model, effect)
+            agrees = max(per_run) < 0.0
         record[effect]["delta_joint_bic"] = gain
-        if gain < best_gain and holdout_gain(holdout, current, model, effect) < 0.0:
+        if gain < best_gain and agrees:
             best, best_gain = effect, gain
     return best
+
+
+def joint_noise_gain(fit: Problem, holdout: Problem, current: Fitted, model: Fitted, effect: str):
+    """Change of the joint BIC of fit and holdout from `current` to `model` (= `current` + noise `effect`).
+
+    The noise terms are properties of the gyro, shared by both runs and
+    fitted on the sum of their ``-2 log L`` (:func:`gyrocomp.diagnose.likelihood.fit_noise_runs`);
+    each run keeps its own regression coefficients (the nonlinear parameters
+    are the fit run's). Flicker or a random walk too weak to pass on one run
+    adds its evidence over two, as a deterministic effect does in
+    :func:`joint_gain`.
+
+    Returns
+    -------
+    gain : float
+        ``Delta(-2 log L) + k ln(n_fit + n_holdout)``.
+    per_run : tuple of float
+        Each run's ``-2 log L`` change at the jointly fitted terms; both
+        must be negative for the runs to agree.
+    """
+    runs = [(p.y, p.design_blocks(current.spec)[0], p.basis) for p in (fit, holdout)]
+    before = ("arw",) + tuple(e for e in current.order if e not in DETERMINISTIC)
+    noise0, dev0, _ = fit_noise_runs(runs, current.noise, before)
+    noise1, dev1, _ = fit_noise_runs(runs, model.noise, before + (effect,))
+    per_run = tuple(
+        profile_deviance(y, X, basis.whitener(noise1))[0] - profile_deviance(y, X, basis.whitener(noise0))[0]
+        for y, X, basis in runs
+    )
+    return dev1 - dev0 + N_PARAMS[effect] * np.log(fit.y.size + holdout.y.size), per_run
 
 
 def holdout_gain(problem: Problem, current: Fitted, model: Fitted, effect: str) -> float:
@@ -406,9 +487,9 @@ def _backward(problem: Problem, holdout: Problem | None, baseline: Fitted, curre
     An effect selected early as a stand-in (a random walk absorbing a
     warm-up and an interference before either was modelled) no longer earns
     its BIC margin once the real cause is in; it is removed (stepwise
-    selection) and may be chosen again later. With a holdout, a
-    deterministic effect that still earns the margin on the joint BIC of
-    both runs (:func:`joint_gain`) stays.
+    selection) and may be chosen again later. With a holdout, an effect that
+    still earns the margin on the joint BIC of both runs (:func:`joint_gain`,
+    :func:`joint_noise_gain`) stays.
     """
     dropped = []
     changed = True
@@ -420,13 +501,18 @@ def _backward(problem: Problem, holdout: Problem | None, baseline: Fitted, curre
             order = tuple(e for e in current.order if e != effect)
             spec = {k: v for k, v in current.spec.items() if k != effect}
             smaller = _refit(problem, baseline, order, spec, current.noise)
-            if smaller.bic < current.bic + margin and not (
-                holdout is not None and effect in DETERMINISTIC and joint_gain(problem, holdout, smaller, effect) < -margin
-            ):
+            if smaller.bic < current.bic + margin and not (holdout is not None and _joint_earns(problem, holdout, smaller, current, effect, margin)):
                 current, changed = smaller, True
                 dropped.append(effect)
                 break
     return current, dropped
+
+
+def _joint_earns(fit: Problem, holdout: Problem, smaller: Fitted, model: Fitted, effect: str, margin: float) -> bool:
+    """Whether `effect` (in `model`, not in `smaller`) lowers the joint BIC of both runs by more than `margin`."""
+    if effect in DETERMINISTIC:
+        return joint_gain(fit, holdout, smaller, effect) < -margin
+    return joint_noise_gain(fit, holdout, smaller, model, effect)[0] < -margin
 
 
 def _refit(problem: Problem, baseline: Fitted, order: tuple, spec: dict, noise: NoiseModel) -> Fitted:

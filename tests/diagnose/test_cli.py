@@ -48,7 +48,13 @@ def test_diagnose_writes_json_markdown_and_plot(tmp_path):
     assert "thermal_lag" in report["candidates"] and "params" in report["candidates"]["thermal_lag"]
     assert set(report["localization"]) == {"fit", "holdout"}
     assert (tmp_path / "gap.png").read_bytes()[:4] == b"\x89PNG"
-    assert "Selected effects" in (tmp_path / "report.md").read_text()
+    markdown = (tmp_path / "report.md").read_text()
+    assert "Selected effects" in markdown
+    # Nothing selected: every candidate states the weakest amplitude it would have been found at.
+    limits = {e: c["detection_limit"] for e, c in report["candidates"].items()}
+    assert all(limits.values()), limits
+    assert f"slope_dps_per_s >= {limits['rate_ramp']['slope_dps_per_s']['value']:.3g} deg/s/s" in markdown
+    assert "with probability 0.950" in markdown
 
 
 def test_bad_input_exits_2(tmp_path):

@@ -39,8 +39,8 @@ def _benchmark():
 @pytest.mark.parametrize("seed, index", [(2024, 4), (2024, 19), (2024, 23), (2024, 28), (7, 9)])
 def test_former_benchmark_misses(seed, index):
     bench = _benchmark()
-    case = bench.make_case(index, seed)
-    fit, holdout = bench.simulate_pair(case)
+    case = bench.make_case(index, seed, draw="absolute")
+    (fit, holdout), _ = bench.simulate_pair(case)
     report = diagnose(fit, holdout)
     assert set(report["selected_effects"]) == set(case["effects"]), case
     gap = report["gap"]
