@@ -19,9 +19,9 @@ check asks that the shape *replicate* in a run it never saw). Otherwise the
 next best effect is tried. A deterministic effect that passes both checks
 still waits when a noise term of the same step passes the fit check and
 explains the holdout better (:func:`_noise_rival`: a sinusoid or a ramp
-fitted to one run's slowest flicker wander). When none passes and a
-holdout is given, an effect may still enter on the **joint** likelihood of
-both runs, which adds the evidence of the two: a deterministic effect with
+fitted to one run's slowest flicker wander). When none passes, no swap
+(below) helps and a holdout is given, an effect may still enter on the
+**joint** likelihood of both runs, which adds the evidence of the two: a deterministic effect with
 coefficients shared, offsets and noise realisations per run
 (:func:`joint_gain`; a random walk does not repeat between runs, a
 deterministic effect does), a noise term with its value shared
@@ -41,7 +41,9 @@ beats it). A swap step (:func:`_swap`) then tries replacing each selected
 noise term by the other noise term, a deterministic effect or both, keeps
 the best replacement that lowers both the BIC and the holdout's
 ``-2 log L`` and whose every new effect earns `bic_margin`, and returns to
-the forward steps; a set already visited ends the search.
+the forward steps; a set already visited ends the search. Swaps come before
+the joint criterion: a weak noise term admitted on two runs beside a
+stand-in would lock the stand-in in.
 
 Look-alikes are told apart by the likelihood of their shapes, not by a
 rule: thermal lag must reproduce the decaying transient after every step,
@@ -230,13 +232,23 @@ def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, sta
     progress = _Progress(callback, len(candidates))
     seen = {_key(current)}
     for _ in range(2 * len(candidates) + 1):
-        current = _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress)
+        current = _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress, joint=False)
         swapped = _swap(fit, holdout, baseline, current, candidates, progress)
-        if swapped is None or _key(swapped[0]) in seen:
+        if swapped is not None and _key(swapped[0]) not in seen:
+            current, step = swapped
+            seen.add(_key(current))
+            steps.append(step)
+            continue
+        if holdout is None:
             break
-        current, step = swapped
+        # Only when neither a forward step nor a swap helps does the joint
+        # likelihood of both runs get its say: a weak noise term entering
+        # beside a stand-in would otherwise lock the stand-in in.
+        joined = _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress, joint=True)
+        if _key(joined) in seen:
+            break
+        current = joined
         seen.add(_key(current))
-        steps.append(step)
     progress.finish()
     return current, first_step, steps, baseline
 
@@ -262,8 +274,8 @@ def _key(model: Fitted):
     return frozenset(model.order)
 
 
-def _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress):
-    """Add effects while one passes both checks; drop those a newer one made redundant."""
+def _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress, joint):
+    """Add effects while one passes both checks (or, with `joint`, the joint criterion); drop those a newer one made redundant."""
     s = fit.settings
     remaining = [e for e in candidates if e not in current.order]
     while remaining and len(current.order) - len(baseline.order) < s.max_effects:
@@ -292,7 +304,7 @@ def _forward(fit, holdout, baseline, current, candidates, steps, first_step, pro
             if passed:
                 accepted = effect
                 break
-        if accepted is None and holdout is not None:
+        if accepted is None and joint:
             accepted = _joint_pass(fit, holdout, current, trials, record)
         steps.append({"tried": record, "accepted": accepted, "dropped": []})
         if accepted is None:
