@@ -572,7 +572,10 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_probl
         lo, hi = s.thermal_lag_tau_s if effect == "thermal_lag" else s.warmup_tau_s
         grid = np.geomspace(lo, hi, s.tau_grid_points)
         key = "tau_s"
-    values = np.array([deviance({key: float(v)}) for v in grid])
+    if effect == "periodic":
+        values = _periodic_grid_deviances(parts, grid)
+    else:
+        values = np.array([deviance({key: float(v)}) for v in grid])
     i = int(np.argmin(values))
     a, b = sorted((np.log(grid[max(i - 1, 0)]), np.log(grid[min(i + 1, grid.size - 1)])))
     if b > a:
@@ -610,6 +613,41 @@ class _JointPart:
             return self.whitener.whiten(periodic_block_means(run, params["period_s"])), ["periodic_sin", "periodic_cos"]
         full, names = effect_columns(run, effect, params, p.poly_degree, p.scale)
         return self.whitener.whiten(block_means(full, run.n_per_block)), names
+
+
+def _periodic_grid_deviances(parts, periods):
+    """:func:`_joint_deviance` of ``periodic`` at every period of a grid, in a few matrix products.
+
+    The base columns do not change along the grid: with ``U`` an orthonormal
+    basis of the (stacked, whitened) base design, ``y_perp = y - U U' y``
+    and the sin/cos columns ``C`` of one period (per run), the deviance is
+    ``constant + |y_perp|^2 - b' A^+ b`` with ``b = C' y_perp`` and
+    ``A = C'C - (U'C)'(U'C)``; all periods' ``C`` are whitened at once.
+    """
+    free = [np.array([n in PER_RUN for n in part.base_names]) for part in parts]
+    shared = np.vstack([part.base_w[:, ~f] for part, f in zip(parts, free)])
+    per_run = linalg.block_diag(*[part.base_w[:, f] for part, f in zip(parts, free)])
+    u, sv, _ = linalg.svd(np.hstack([shared, per_run]), full_matrices=False, check_finite=False)
+    u = u[:, sv > sv[0] * 1e-12]
+    y = np.concatenate([part.y_w for part in parts])
+    y_perp = y - u @ (u.T @ y)
+    n_g = len(periods)
+    gram = np.zeros((n_g, 2 * len(parts), 2 * len(parts)))
+    b = np.zeros((n_g, 2 * len(parts)))
+    ucs = np.zeros((n_g, u.shape[1], 2 * len(parts)))
+    row = 0
+    for j, part in enumerate(parts):
+        k = part.y_w.size
+        cols = np.hstack([periodic_block_means(part.problem.run, p) for p in periods])  # (k, 2 G)
+        cw = part.whitener.whiten(cols).reshape(k, n_g, 2).transpose(1, 0, 2)  # (G, k, 2)
+        gram[:, 2 * j : 2 * j + 2, 2 * j : 2 * j + 2] = np.einsum("gki,gkj->gij", cw, cw)
+        b[:, 2 * j : 2 * j + 2] = np.einsum("gki,k->gi", cw, y_perp[row : row + k])
+        ucs[:, :, 2 * j : 2 * j + 2] = np.einsum("kp,gki->gpi", u[row : row + k], cw)
+        row += k
+    a = gram - np.einsum("gpi,gpj->gij", ucs, ucs)
+    explained = np.einsum("gi,gij,gj->g", b, np.linalg.pinv(a, rcond=1e-12, hermitian=True), b)
+    constant = sum(part.constant for part in parts)
+    return constant + float(y_perp @ y_perp) - explained
 
 
 def _joint_deviance(parts, params, effect):

@@ -73,3 +73,34 @@ def test_fit_noise_recovers_bias_instability(b_deg_h):
     noise, _, _ = fit_noise(y, np.ones((y.size, 1)), basis, start, ("arw", "bias_instability"))
     assert_allclose(noise.bias_instability * 3600, b_deg_h, rtol=0.25)
     assert_allclose(noise.arw * 60, 1.0, rtol=0.1)
+
+
+def test_periodic_grid_deviances_equal_the_direct_fits():
+    """The batched period scan equals one least-squares fit per period, alone and on two runs."""
+    import pandas as pd
+
+    from gyrocomp.diagnose import DiagnoseSettings, problems
+    from gyrocomp.diagnose import select
+    from gyrocomp.io import recording_from_frame
+
+    rng = np.random.default_rng(11)
+    t = np.arange(4 * 3600, dtype=float)
+    temperature = 25.0 + 10.0 * np.sin(2 * np.pi * t / 7200.0)
+    recs = [
+        recording_from_frame(
+            pd.DataFrame({"time": t, "rate": 1e-3 * temperature + 3e-3 * np.sin(2 * np.pi * t / 900.0 + k)
+                          + sim_noise.white(t.size, 1.0, 1.0, rng) + sim_noise.flicker(t.size, 1.0, 20.0, rng),
+                          "temperature": temperature}),
+            name=f"run{k}",
+        )
+        for k in range(2)
+    ]
+    fit_p, hold_p, _ = problems(*recs, DiagnoseSettings())
+    model = select.extend(fit_p, select.fit_baseline(fit_p), "bias_instability")
+    length = fit_p.y.size * fit_p.run.block_s
+    periods = 1.0 / np.arange(2.0 / length, 1.0 / (4.0 * fit_p.run.block_s), 1.0 / length)  # a third of the selection's grid
+    for others in ((), ((hold_p, model),)):
+        parts = [select._JointPart(fit_p, model, "periodic")] + [select._JointPart(p, m, "periodic") for p, m in others]
+        direct = [select._joint_deviance(parts, {"period_s": float(p)}, "periodic")[0] for p in periods]
+        assert_allclose(select._periodic_grid_deviances(parts, periods), direct, rtol=1e-10)
+        assert 850.0 < periods[int(np.argmin(direct))] < 950.0
