@@ -326,19 +326,16 @@ def _noise_rival(fit, holdout, current, trials, effect):
     beat it by BIC, and its shape (the phase of a sinusoid is re-estimated
     per run) replicates on the holdout's own wander. On the holdout, though,
     the noise term explains the new wander at every frequency while the
-    shape explains one. When the fit run cannot tell the two apart (BICs
-    within `bic_margin`), a noise trial that passes the fit run's BIC check
+    shape explains one: a noise trial that passes the fit run's BIC check
     and gives the holdout a lower ``-2 log L`` (both models frozen, per-run
     columns refitted) is preferred, and the shape waits for a later step,
-    where it is judged beside that noise term. (A strong ramp under a random
-    walk also gives the holdout a lower ``-2 log L`` with a random walk
-    inflated to absorb it, but the fit run prefers the ramp by far.)
+    where it is judged beside that noise term.
     """
     s = fit.settings
     hold_effect = holdout_fit(holdout, trials[effect])[0]
     best = None
     for name, model in trials.items():
-        if name in DETERMINISTIC or model.bic - current.bic >= -s.bic_margin or model.bic >= trials[effect].bic + s.bic_margin:
+        if name in DETERMINISTIC or model.bic - current.bic >= -s.bic_margin:
             continue
         dev = holdout_fit(holdout, model)[0]
         if dev < hold_effect and (best is None or dev < best[1]):
@@ -356,15 +353,10 @@ def _joint_pass(fit, holdout, current, trials, record):
     deterministic effect lowers the fit run's ``-2 log L`` and its shape
     replicates on the holdout, :func:`holdout_gain`; a noise term lowers
     both runs' ``-2 log L`` at its joint value); the lowest joint BIC wins.
-    A sinusoid is not tried: its amplitude and phase are per-run columns.
     """
     s = fit.settings
     best, best_gain = None, -s.bic_margin
     for effect, model in trials.items():
-        if effect == "periodic":
-            # Amplitude and phase are both re-estimated per run: the runs share
-            # only the period, so their sum adds no evidence of replication.
-            continue
         if effect in DETERMINISTIC:
             if model.deviance >= current.deviance:
                 continue
