@@ -576,31 +576,31 @@ def _open_source(path: str | os.PathLike) -> tuple[str, str | bytes, str]:
         raw = sys.stdin.buffer.read()
         return "-", raw, hashlib.sha256(raw).hexdigest()
     name = os.fspath(path)
-    try:
-        with open(name, "rb") as fh:
-            sha = hashlib.file_digest(fh, "sha256").hexdigest()
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{name}: is a directory, expected a file") from None
-    except PermissionError:
-        raise InputError(f"{name}: permission denied") from None
-    return name, name, sha
+    with _open_input(name) as fh:
+        return name, name, hashlib.file_digest(fh, "sha256").hexdigest()
 
 
 def _read_bytes(path: str | os.PathLike) -> tuple[str, bytes]:
     if str(path) == "-":
         return "-", sys.stdin.buffer.read()
     name = os.fspath(path)
+    with _open_input(name) as fh:
+        return name, fh.read()
+
+
+@contextlib.contextmanager
+def _open_input(name: str):
+    """``open(name, "rb")``, its failures as one-line :class:`InputError` naming the file."""
     try:
-        with open(name, "rb") as fh:
-            return name, fh.read()
+        fh = open(name, "rb")
     except FileNotFoundError:
         raise InputError(f"{name}: no such file") from None
     except IsADirectoryError:
         raise InputError(f"{name}: is a directory, expected a file") from None
     except PermissionError:
         raise InputError(f"{name}: permission denied") from None
+    with fh:
+        yield fh
 
 
 def _kind(name: str) -> str:
