@@ -253,7 +253,9 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
         Block means, regressors and covariance basis of each run.
     start : NoiseModel
     free : sequence of str
-        Terms whose log-variances are optimised (Nelder-Mead, from `start`).
+        Terms whose log-variances are optimised (Nelder-Mead, from `start`;
+        a flicker or random-walk term starts no lower than where it matches
+        0.3 times the white level at one block).
 
     Returns
     -------
@@ -263,7 +265,13 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
     betas : list of ndarray
     """
     names = tuple(free)
-    x0 = np.array([np.log(max(getattr(start, name), 1e-30) ** 2) for name in names])
+    # The likelihood is flat in a log-variance far below the white level: a
+    # term that another run (or model) fitted to nothing restarts where it
+    # would match 0.3 times the white level at one block.
+    block_s = runs[0][2].block_s
+    white = start.arw / np.sqrt(block_s)
+    level = {"arw": 0.0, "bias_instability": 0.3 * white, "rate_random_walk": 0.3 * white / np.sqrt(block_s)}
+    x0 = np.array([np.log(max(getattr(start, name), level[name], 1e-30) ** 2) for name in names])
     x0 = np.maximum(x0, _LN_FLOOR + 5.0)
 
     def model(z):

@@ -39,8 +39,8 @@ Greedy steps can stop at one noise term standing in for two causes (a
 random walk absorbing flicker and a warm-up or hysteresis: neither alone
 beats it). A swap step (:func:`_swap`) then tries replacing each selected
 noise term by the other noise term, a deterministic effect or both, keeps
-the best replacement that lowers both the BIC and the holdout's
-``-2 log L`` and whose every new effect earns `bic_margin`, and returns to
+the best replacement that lowers the BIC, and the BIC plus the holdout's
+``-2 log L``, and whose every new effect earns `bic_margin`, and returns to
 the forward steps; a set already visited ends the search. Swaps come before
 the joint criterion: a weak noise term admitted on two runs beside a
 stand-in would lock the stand-in in.
@@ -164,16 +164,8 @@ def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
                 spec[other] = _best_nonlinear(problem, trial, other)
     else:
         stochastic.append(effect)
-    start_values = dataclasses.asdict(current.noise)
-    for e in stochastic:
-        if not start_values[e]:
-            # Start the new term where it matches the white level at T_b.
-            scale = {"bias_instability": 1.0, "rate_random_walk": 1.0 / np.sqrt(problem.run.block_s)}[e]
-            start_values[e] = 0.3 * current.noise.arw / np.sqrt(problem.run.block_s) * scale
     Xb, names = problem.design_blocks(spec)
-    noise, deviance, beta = fit_noise(
-        problem.y, Xb, problem.basis, NoiseModel(**start_values), ("arw",) + tuple(stochastic)
-    )
+    noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, current.noise, ("arw",) + tuple(stochastic))
     k = current.n_params + N_PARAMS[effect]
     return Fitted(current.order + (effect,), spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
 
@@ -349,10 +341,11 @@ def _joint_pass(fit, holdout, current, trials, record):
     Tried after no effect passes the fit-run BIC and holdout checks: an
     effect qualifies when its joint BIC change (:func:`joint_gain` for a
     deterministic effect, :func:`joint_noise_gain` for a noise term) is
-    below ``-bic_margin`` and each run on its own points the same way (a
-    deterministic effect lowers the fit run's ``-2 log L`` and its shape
-    replicates on the holdout, :func:`holdout_gain`; a noise term lowers
-    both runs' ``-2 log L`` at its joint value); the lowest joint BIC wins.
+    below ``-bic_margin`` and each run on its own points the same way: at
+    the joint estimate, both runs' ``-2 log L`` drop (the holdout's with its
+    own noise: a random walk that one run's realisation barely shows must
+    not count against a ramp that both runs carry); the lowest joint BIC
+    wins.
     """
     s = fit.settings
     best, best_gain = None, -s.bic_margin
@@ -360,11 +353,10 @@ def _joint_pass(fit, holdout, current, trials, record):
         if effect in DETERMINISTIC:
             if model.deviance >= current.deviance:
                 continue
-            gain = joint_gain(fit, holdout, current, effect)
-            agrees = holdout_gain(holdout, current, model, effect) < 0.0
+            gain, per_run = joint_gain(fit, holdout, current, effect)
         else:
             gain, per_run = joint_noise_gain(fit, holdout, current, model, effect)
-            agrees = max(per_run) < 0.0
+        agrees = max(per_run) < 0.0
         record[effect]["delta_joint_bic"] = gain
         if gain < best_gain and agrees:
             best, best_gain = effect, gain
@@ -445,9 +437,13 @@ def _swap(fit, holdout, baseline, current, candidates, progress):
     causes (one random walk absorbing flicker and a warm-up): neither true
     cause alone beats it, both together do. Each selected noise term is
     replaced by the other noise term, by one unselected deterministic effect,
-    or by both; the best replacement by BIC is taken when it lowers the BIC
-    and the holdout's ``-2 log L`` (frozen parameters) below the current
-    model's and every effect it brings in earns `bic_margin` on its own.
+    or by both; the best replacement by BIC is taken when it lowers the BIC,
+    and the BIC plus the holdout's ``-2 log L`` (frozen parameters), below
+    the current model's, and every effect it brings in earns `bic_margin`
+    on its own. The sum lets the fit run's evidence outweigh a holdout that
+    is nearly indifferent (a slow thermal lag against the random walk it
+    replaces), while a shape that merely absorbed the fit run's wander
+    leaves the holdout's wander unexplained and costs far more there.
 
     Returns
     -------
@@ -477,7 +473,7 @@ def _swap(fit, holdout, baseline, current, candidates, progress):
                 if not all(_earns(fit, baseline, option, e, s.bic_margin) for e in brought):
                     continue
                 hold = holdout_fit(holdout, option)[0] if holdout is not None else 0.0
-                if hold < current_hold:
+                if option.bic + hold < current.bic + current_hold:
                     best = (option, {"out": [out], "in": list(brought), "delta_bic": option.bic - current.bic,
                                      "delta_holdout_deviance": hold - current_hold if holdout is not None else None})
     if best is None:
@@ -523,7 +519,7 @@ def _backward(problem: Problem, holdout: Problem | None, baseline: Fitted, curre
 def _joint_earns(fit: Problem, holdout: Problem, smaller: Fitted, model: Fitted, effect: str, margin: float) -> bool:
     """Whether `effect` (in `model`, not in `smaller`) lowers the joint BIC of both runs by more than `margin`."""
     if effect in DETERMINISTIC:
-        return joint_gain(fit, holdout, smaller, effect) < -margin
+        return joint_gain(fit, holdout, smaller, effect)[0] < -margin
     return joint_noise_gain(fit, holdout, smaller, model, effect)[0] < -margin
 
 
@@ -557,7 +553,7 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_probl
     parts = [_JointPart(problem, current, effect)] + [_JointPart(p, m, effect) for p, m in others_problems]
 
     def deviance(params):
-        return _joint_deviance(parts, params, effect)[0]
+        return float(_joint_deviance(parts, params, effect).sum())
 
     if effect == "hysteresis":
         grid = [float(v) for v in s.hysteresis_deadband_c]
@@ -651,18 +647,18 @@ def _periodic_grid_deviances(parts, periods):
 
 
 def _joint_deviance(parts, params, effect):
-    """``-2 log L`` summed over runs: shared coefficients, per-run :data:`PER_RUN` columns.
+    """``-2 log L`` of each run: shared coefficients, per-run :data:`PER_RUN` columns.
 
-    Returns the deviance and the number of blocks.
+    Returns an array, one deviance per run (their sum is the joint one).
     """
-    blocks, ys, constant = [], [], 0.0
+    blocks, ys, constants = [], [], []
     for part in parts:
         cols, names = part.candidate(effect, params)
         X = np.hstack([part.base_w, cols])
         names = part.base_names + names
         blocks.append((X, np.array([n in PER_RUN for n in names])))
         ys.append(part.y_w)
-        constant += part.constant
+        constants.append(part.constant)
     if len(parts) == 1:
         X = blocks[0][0]
     else:
@@ -673,10 +669,11 @@ def _joint_deviance(parts, params, effect):
     y = np.concatenate(ys)
     beta, *_ = linalg.lstsq(X, y, cond=1e-12, lapack_driver="gelsy", check_finite=False)
     r = y - X @ beta
-    return constant + float(r @ r), y.size
+    ends = np.cumsum([part.y_w.size for part in parts])[:-1]
+    return np.array([c + float(rk @ rk) for c, rk in zip(constants, np.split(r, ends))])
 
 
-def joint_gain(fit: Problem, holdout: Problem, current: Fitted, effect: str) -> float:
+def joint_gain(fit: Problem, holdout: Problem, current: Fitted, effect: str):
     """Change of the joint BIC of fit and holdout from `current` to `current` + deterministic `effect`.
 
     The two runs are one gyro with two noise realisations: their
@@ -686,22 +683,39 @@ def joint_gain(fit: Problem, holdout: Problem, current: Fitted, effect: str) -> 
     run (one realisation of a random walk can read larger). A random walk
     does not repeat between runs, a deterministic effect does, so the sum
     detects an effect that one run's wander hides. The effect's nonlinear
-    parameter is fitted on the sum; the change is
+    parameter is fitted on the sum, then those of the effects already in
+    (one coordinate-descent pass, as in :func:`extend`: a warm-up fitted
+    alone stretches its time constant over a ramp); the change is
     ``Delta(-2 log L) + k ln(n_fit + n_holdout)``.
 
     The held-out gap of a model selected this way is no longer independent
     of the selection (its parameters are still fitted on the fit run only).
+
+    Returns
+    -------
+    gain : float
+    per_run : tuple of float
+        Each run's ``-2 log L`` change at the joint coefficients; both must
+        be negative for the runs to agree.
     """
     stochastic = ("arw",) + tuple(e for e in current.order if e not in DETERMINISTIC)
     Xb, _ = holdout.design_blocks(current.spec)
     noise, _, _ = fit_noise(holdout.y, Xb, holdout.basis, current.noise, stochastic)
     on_holdout = dataclasses.replace(current, noise=noise)
-    parts_c = [_JointPart(fit, current, None), _JointPart(holdout, on_holdout, None)]
-    dev_c, n = _joint_deviance(parts_c, None, None)
-    params = _best_nonlinear(fit, current, effect, ((holdout, on_holdout),))
-    parts = [_JointPart(fit, current, effect), _JointPart(holdout, on_holdout, effect)]
-    dev_m, _ = _joint_deviance(parts, params, effect)
-    return dev_m - dev_c + N_PARAMS[effect] * np.log(n)
+
+    def runs_deviance(spec):
+        models = (dataclasses.replace(current, spec=spec), dataclasses.replace(on_holdout, spec=spec))
+        return _joint_deviance([_JointPart(fit, models[0], None), _JointPart(holdout, models[1], None)], None, None)
+
+    before = runs_deviance(current.spec)
+    spec = {**current.spec, effect: _best_nonlinear(fit, current, effect, ((holdout, on_holdout),))}
+    for other in current.spec:
+        if _NONLINEAR.get(other):
+            trial = dataclasses.replace(current, spec=spec)
+            spec[other] = _best_nonlinear(fit, trial, other, ((holdout, dataclasses.replace(on_holdout, spec=spec)),))
+    change = runs_deviance(spec) - before
+    n = fit.y.size + holdout.y.size
+    return float(change.sum() + N_PARAMS[effect] * np.log(n)), tuple(float(c) for c in change)
 
 
 def sample_arw(run: Run) -> float:

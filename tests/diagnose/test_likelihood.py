@@ -101,6 +101,6 @@ def test_periodic_grid_deviances_equal_the_direct_fits():
     periods = 1.0 / np.arange(2.0 / length, 1.0 / (4.0 * fit_p.run.block_s), 1.0 / length)  # a third of the selection's grid
     for others in ((), ((hold_p, model),)):
         parts = [select._JointPart(fit_p, model, "periodic")] + [select._JointPart(p, m, "periodic") for p, m in others]
-        direct = [select._joint_deviance(parts, {"period_s": float(p)}, "periodic")[0] for p in periods]
+        direct = [select._joint_deviance(parts, {"period_s": float(p)}, "periodic").sum() for p in periods]
         assert_allclose(select._periodic_grid_deviances(parts, periods), direct, rtol=1e-10)
         assert 850.0 < periods[int(np.argmin(direct))] < 950.0

@@ -145,4 +145,6 @@ def test_joint_gain_of_a_repeated_run_doubles_its_evidence():
     assert one_run < -50.0
     n = 2 * problem.y.size
     shifted = Problem(Run("b", t, rate + 0.3, None, 1.0, 10), DiagnoseSettings(), None, 0)
-    np.testing.assert_allclose(joint_gain(problem, shifted, base, "warmup"), 2.0 * one_run + 2.0 * np.log(n), rtol=1e-3)
+    gain, per_run = joint_gain(problem, shifted, base, "warmup")
+    np.testing.assert_allclose(gain, 2.0 * one_run + 2.0 * np.log(n), rtol=1e-3)
+    np.testing.assert_allclose(per_run, [one_run, one_run], rtol=1e-3)
