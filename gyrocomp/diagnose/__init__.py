@@ -168,7 +168,7 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
                 "fit": g["fit"]["total"],
                 "holdout": g["holdout"]["total"] if hold_p is not None else None,
                 "parts": {
-                    run: {k: g[run][k] for k in ("deterministic", "stochastic", "noise_floor")}
+                    run: {k: g[run][k] for k in ("deterministic", "stochastic", "noise_floor", "noise_level")}
                     for run in ("fit", "holdout")
                     if g[run] is not None
                 },

@@ -32,21 +32,32 @@ recording is indistinguishable from the simulation within sampling noise,
 0.1 a mismatch of about 10 %. The same definition is applied to the fit and
 to the holdout recording.
 
+Sampling noise alone gives some ``G > 0``: ``noise_level`` is the 95th
+percentile of ``G`` for a recording that *is* the simulation, with ``D``
+and the log ratios taken as independent normals of the variances above and
+``D^2 + S`` as a scaled chi-square of the same mean and variance
+(Satterthwaite 1946). A gap below it is no evidence of a mismatch; an
+effect whose gap stays below it is one the likelihood of the selection can
+see and this scalar cannot.
+
 References
 ----------
 .. [1] J. A. Barnes, "Tables of bias functions, B1 and B2, for variances
    based on finite samples of processes with power law spectral
    densities", NBS Technical Note 375 (1969).
+.. [2] F. E. Satterthwaite, "An approximate distribution of estimates of
+   variance components", Biometrics Bulletin 2(6), 110-114 (1946).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy import stats
 
 from gyrocomp import allan
 from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseModel, block_means
 
-__all__ = ["gap", "barnes_b1"]
+__all__ = ["gap", "barnes_b1", "noise_level"]
 
 
 def barnes_b1(n, mu):
@@ -62,8 +73,39 @@ def barnes_b1(n, mu):
     """
     n = float(n)
     if mu == 0:
-        return n * np.log(n) / (2.0 * (n - 1.0) * np.log(2.0))
+        return float(n * np.log(n) / (2.0 * (n - 1.0) * np.log(2.0)))
     return n * (1.0 - n**mu) / (2.0 * (n - 1.0) * (1.0 - 2.0**mu))
+
+
+def noise_level(variances, quantile=0.95):
+    """Quantile of ``G`` for a recording that is the simulation (module docstring).
+
+    Parameters
+    ----------
+    variances : sequence of float
+        ``var D`` (or nothing when ``D`` is not computed), then the variance
+        of each log ratio, ``1 / (2 edf)``, divided by the number of taus
+        (the stochastic part is their mean).
+    quantile : float, default=0.95
+
+    Returns
+    -------
+    float
+        ``sqrt(q - E_0)`` with ``q`` the quantile of the scaled chi-square
+        ``a chi2_nu`` whose mean ``E_0 = sum v`` and variance ``2 sum v^2``
+        are those of ``sum v_j z_j^2``.
+
+    Examples
+    --------
+    >>> round(noise_level([2 / 286]), 3)  # D alone, 288 blocks: sqrt((3.84 - 1) var D)
+    0.141
+    """
+    v = np.asarray(variances, dtype=float)
+    mean, var = v.sum(), 2.0 * np.sum(v**2)
+    if mean <= 0.0:
+        return 0.0
+    scale, dof = var / (2.0 * mean), 2.0 * mean**2 / var
+    return float(np.sqrt(max(0.0, scale * stats.chi2.ppf(quantile, dof) - mean)))
 
 
 def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_windows=16):
@@ -88,7 +130,8 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
     -------
     dict
         ``total`` (G), ``deterministic`` (D), ``stochastic`` (S),
-        ``noise_floor`` (E_0), and ``timescale``: ``tau_s``, ``adev``,
+        ``noise_floor`` (E_0), ``noise_level`` (:func:`noise_level`: the
+        95th percentile of G under no mismatch), and ``timescale``: ``tau_s``, ``adev``,
         ``adev_model``, ``log_ratio`` per octave tau.
     """
     r = np.asarray(residual_dps, dtype=float)
@@ -97,7 +140,7 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
     means = block_means(r, n_per)
     t_g = n_per / fs_hz
     n = means.size
-    floor = 0.0
+    variances = []
     if n - n_fitted >= 2:
         s2 = float(np.var(means, ddof=1)) * (n - 1) / (n - n_fitted)
         expected = (
@@ -106,7 +149,7 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
             + barnes_b1(n, 1) * noise.rate_random_walk**2 * t_g / 3.0
         )
         d = float(np.log(max(s2, 1e-300) / expected))
-        floor += 2.0 / (n - n_fitted)
+        variances.append(2.0 / (n - n_fitted))
     else:
         d = 0.0
     tau, adev, _ = allan.oadev(r, fs_hz, "octave")
@@ -116,11 +159,13 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
     log_ratio = np.log(np.maximum(adev, 1e-300) / model)
     s = float(np.mean(log_ratio**2)) if tau.size else 0.0
     if tau.size:
-        floor += float(np.mean(1.0 / (2.0 * (length_s / tau - 1.0))))
+        variances += list(1.0 / (2.0 * (length_s / tau - 1.0)) / tau.size)
+    floor = float(np.sum(variances))
     return {
         "total": float(np.sqrt(max(0.0, d * d + s - floor))),
         "deterministic": d,
         "stochastic": s,
         "noise_floor": floor,
+        "noise_level": noise_level(variances),
         "timescale": {"tau_s": tau, "adev": adev, "adev_model": model, "log_ratio": log_ratio},
     }

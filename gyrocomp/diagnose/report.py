@@ -84,7 +84,8 @@ def to_json(body: dict, *, inputs: list, settings: dict) -> dict:
     out["gap_definition"] = (
         "G = sqrt(max(0, D^2 + S - E0)): D = ln(variance of the 100 s residual means / the noise "
         "model's expectation, Barnes B1), S = mean over octave taus of ln^2(ADEV residual / ADEV model), "
-        "E0 their expectation for a recording that is the calibrated simulation; dimensionless, 0 = no gap"
+        "E0 their expectation for a recording that is the calibrated simulation; dimensionless, 0 = no gap; "
+        "noise_level: the 95th percentile of G for such a recording (a gap below it is within sampling noise)"
     )
     return out
 
@@ -103,6 +104,7 @@ def to_markdown(report: dict) -> str:
     for name in ("baseline", "selected"):
         g = report["gap"][name]
         lines.append(f"| {name} | {_fmt(g['fit'])} | {_fmt(g['holdout'])} |")
+    lines.append("| sampling noise (95 %) | {} | {} |".format(*_noise_levels(report)))
     lines += [
         "",
         "| candidate | gap fit | gap holdout | delta BIC | parameters | detection limit |",
@@ -146,10 +148,17 @@ def summary_table(report: dict):
     for name in ("baseline", "selected"):
         g = report["gap"][name]
         table.add_row(name, _fmt(g["fit"]), _fmt(g["holdout"]), "", "")
+    table.add_row("sampling noise (95 %)", *_noise_levels(report), "", "")
     for effect, c in report["candidates"].items():
         mark = " *" if effect in sel else ""
         table.add_row(f"+ {effect}{mark}", _fmt(c["gap_fit"]), _fmt(c["gap_holdout"]), _fmt(c["delta_bic"]), _limit(effect, c, sel))
     return table
+
+
+def _noise_levels(report):
+    """The selected model's gap ``noise_level`` on the fit and holdout runs, formatted (None where absent)."""
+    parts = report["gap"]["selected"]["parts"]
+    return tuple(_fmt(parts[run]["noise_level"] if run in parts else None) for run in ("fit", "holdout"))
 
 
 def _limit(effect, candidate, selected):

@@ -27,3 +27,26 @@ def test_gap_is_small_for_the_simulation_itself_and_large_for_drift():
     drifted = gap(x + 0.005 * np.sin(2 * np.pi * t / 3000.0), fs, noise)
     assert drifted["total"] > 0.5
     assert drifted["deterministic"] > 0.5
+
+
+def test_noise_level_is_the_95th_percentile_of_the_null_gap():
+    """On 400 recordings that are the simulation (white noise, 2 h at 1 Hz), about 5 % exceed `noise_level`."""
+    rng = np.random.default_rng(8)
+    fs, n = 1.0, 2 * 3600
+    noise = NoiseModel(arw=1 / 60)
+    results = [gap(sim_noise.white(n, fs, 1.0, rng), fs, noise) for _ in range(400)]
+    level = results[0]["noise_level"]
+    assert all(r["noise_level"] == level for r in results)
+    totals = np.array([r["total"] for r in results])
+    assert 0.02 < np.mean(totals > level) < 0.09
+    assert_allclose(np.quantile(totals, 0.95), level, rtol=0.15)
+
+
+def test_noise_level_of_a_chi_square():
+    """Equal variances make D^2 + S exactly v chi2_k: the level is sqrt(v (chi2_k(0.95) - k))."""
+    from scipy import stats
+
+    from gyrocomp.diagnose.gap import noise_level
+
+    assert_allclose(noise_level([0.01] * 4), np.sqrt(0.01 * (stats.chi2.ppf(0.95, 4) - 4)))
+    assert noise_level([]) == 0.0
