@@ -64,9 +64,9 @@ class DiagnoseSettings:
     max_effects: int = 8
     min_temperature_span_c: float = 2.0
     temp_rate_smooth_s: float = 60.0
-    thermal_lag_tau_s: tuple = (20.0, 28800.0)
+    thermal_lag_tau_s: tuple = (2.0, 28800.0)
     warmup_tau_s: tuple = (60.0, 14400.0)
-    tau_grid_points: int = 20
+    tau_grid_points: int = 24
     hysteresis_deadband_c: tuple = (0.25, 0.5, 1.0, 2.0, 4.0)
     periodic_min_blocks: float = 4.0
     periodic_oversample: float = 3.0

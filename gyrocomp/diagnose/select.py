@@ -37,10 +37,12 @@ effect kept the report names none: the baseline explains the recording.
 
 Greedy steps can stop at one noise term standing in for two causes (a
 random walk absorbing flicker and a warm-up or hysteresis: neither alone
-beats it). A swap step (:func:`_swap`) then tries replacing each selected
-noise term by the other noise term, a deterministic effect or both, keeps
-the best replacement that lowers the BIC, and the BIC plus the holdout's
-``-2 log L``, and whose every new effect earns `bic_margin`, and returns to
+beats it), or at the look-alike of a deterministic effect. A swap step
+(:func:`_swap`) then tries replacing each selected noise term by the other
+noise term, a deterministic effect or both (kept when it lowers the BIC,
+and the BIC plus the holdout's ``-2 log L``), then each selected
+deterministic effect by another (kept when it lowers the joint BIC of both
+runs); every new effect must earn `bic_margin`. It returns to
 the forward steps; a set already visited ends the search. Swaps come before
 the joint criterion: a weak noise term admitted on two runs beside a
 stand-in would lock the stand-in in.
@@ -431,7 +433,7 @@ def _holdout_parts(problem: Problem, model: Fitted):
 
 
 def _swap(fit, holdout, baseline, current, candidates, progress):
-    """Replace a selected noise term by the other one and/or a deterministic effect.
+    """Replace a selected effect by a look-alike: a noise term by the other one and/or a deterministic effect, a deterministic effect by another.
 
     Greedy selection can stop at a noise term that stands in for two
     causes (one random walk absorbing flicker and a warm-up): neither true
@@ -445,6 +447,14 @@ def _swap(fit, holdout, baseline, current, candidates, progress):
     replaces), while a shape that merely absorbed the fit run's wander
     leaves the holdout's wander unexplained and costs far more there.
 
+    Failing that, each selected deterministic effect is replaced by one
+    unselected deterministic effect (near the edge a thermal lag of a few
+    seconds is, on one run, a temperature-rate term to first order); with a
+    holdout the replacement is judged on the joint BIC of both runs
+    (:func:`_joint_bic`: shapes shared, each run's noise its own, so a noise
+    level that one run's realisation sets low does not decide between two
+    shapes), without one on the BIC.
+
     Returns
     -------
     (Fitted, dict) or None
@@ -452,13 +462,10 @@ def _swap(fit, holdout, baseline, current, candidates, progress):
     """
     s = fit.settings
     chosen = current.order[len(baseline.order) :]
-    noise_terms = [e for e in chosen if e not in DETERMINISTIC]
-    if not noise_terms:
-        return None
     current_hold = holdout_fit(holdout, current)[0] if holdout is not None else 0.0
     spare = [e for e in candidates if e in DETERMINISTIC and e not in current.order]
     best = None
-    for out in noise_terms:
+    for out in (e for e in chosen if e not in DETERMINISTIC):
         reduced = _refit(fit, baseline, tuple(e for e in current.order if e != out), current.spec, current.noise)
         others = [e for e in candidates if e not in DETERMINISTIC and e not in current.order]
         bases = [(reduced, ())] + [(extend(fit, reduced, o), (o,)) for o in others]
@@ -477,9 +484,34 @@ def _swap(fit, holdout, baseline, current, candidates, progress):
                     best = (option, {"out": [out], "in": list(brought), "delta_bic": option.bic - current.bic,
                                      "delta_holdout_deviance": hold - current_hold if holdout is not None else None})
     if best is None:
+        score = (lambda m: _joint_bic(fit, holdout, m)) if holdout is not None else (lambda m: m.bic)
+        current_score = score(current) if any(e in DETERMINISTIC for e in chosen) else None
+        best_gain = 0.0
+        for out in (e for e in chosen if e in DETERMINISTIC):
+            order = tuple(e for e in current.order if e != out)
+            reduced = _refit(fit, baseline, order, {k: v for k, v in current.spec.items() if k != out}, current.noise)
+            for d in spare:
+                option = extend(fit, reduced, d)
+                progress.tick()
+                gain = score(option) - current_score
+                if gain < best_gain and _earns(fit, baseline, option, d, s.bic_margin):
+                    best_gain = gain
+                    best = (option, {"out": [out], "in": [d], "delta_bic": option.bic - current.bic})
+                    if holdout is not None:
+                        best[1]["delta_joint_bic"] = gain
+    if best is None:
         return None
     model, record = best
     return model, {"tried": {}, "accepted": None, "dropped": [], "swapped": record}
+
+
+def _joint_bic(fit: Problem, holdout: Problem, model: Fitted) -> float:
+    """BIC of `model` on both runs: shared coefficients (per-run :data:`PER_RUN` columns), each run's noise fitted on it."""
+    stochastic = ("arw",) + tuple(e for e in model.order if e not in DETERMINISTIC)
+    Xb, _ = holdout.design_blocks(model.spec)
+    noise, _, _ = fit_noise(holdout.y, Xb, holdout.basis, model.noise, stochastic)
+    parts = [_JointPart(fit, model, None), _JointPart(holdout, dataclasses.replace(model, noise=noise), None)]
+    return float(_joint_deviance(parts, None, None).sum()) + model.n_params * np.log(fit.y.size + holdout.y.size)
 
 
 def _earns(problem, baseline, model, effect, margin):
