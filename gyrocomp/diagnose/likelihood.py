@@ -282,8 +282,7 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
 
     rotated = {}
 
-    def run_deviance(k, y, X, basis, noise):
-        w = basis.whitener(noise)
+    def run_deviance(k, y, X, w):
         if w.d is None:
             try:
                 return profile_deviance(y, X, w)[0]
@@ -298,7 +297,15 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
 
     def objective(z):
         noise = model(z)
-        return sum(run_deviance(k, y, X, basis, noise) for k, (y, X, basis) in enumerate(runs))
+        # Runs of one length and block share their covariance: factorise it once.
+        whiteners = {}
+        total = 0.0
+        for k, (y, X, basis) in enumerate(runs):
+            key = (basis.n_blocks, basis.block_s)
+            if key not in whiteners:
+                whiteners[key] = basis.whitener(noise)
+            total += run_deviance(k, y, X, whiteners[key])
+        return total
 
     best = optimize.minimize(
         objective, x0, method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 1e-2, "initial_simplex": _simplex(x0)}
