@@ -507,11 +507,16 @@ def _swap(fit, holdout, baseline, current, candidates, progress):
 
 def _joint_bic(fit: Problem, holdout: Problem, model: Fitted) -> float:
     """BIC of `model` on both runs: shared coefficients (per-run :data:`PER_RUN` columns), each run's noise fitted on it."""
-    stochastic = ("arw",) + tuple(e for e in model.order if e not in DETERMINISTIC)
-    Xb, _ = holdout.design_blocks(model.spec)
-    noise, _, _ = fit_noise(holdout.y, Xb, holdout.basis, model.noise, stochastic)
-    parts = [_JointPart(fit, model, None), _JointPart(holdout, dataclasses.replace(model, noise=noise), None)]
+    parts = [_JointPart(fit, model, None), _JointPart(holdout, _with_own_noise(holdout, model), None)]
     return float(_joint_deviance(parts, None, None).sum()) + model.n_params * np.log(fit.y.size + holdout.y.size)
+
+
+def _with_own_noise(problem: Problem, model: Fitted) -> Fitted:
+    """`model` with its noise terms refitted on another run (one realisation of a random walk can read larger)."""
+    stochastic = ("arw",) + tuple(e for e in model.order if e not in DETERMINISTIC)
+    Xb, _ = problem.design_blocks(model.spec)
+    noise, _, _ = fit_noise(problem.y, Xb, problem.basis, model.noise, stochastic)
+    return dataclasses.replace(model, noise=noise)
 
 
 def _earns(problem, baseline, model, effect, margin):
@@ -730,10 +735,7 @@ def joint_gain(fit: Problem, holdout: Problem, current: Fitted, effect: str):
         Each run's ``-2 log L`` change at the joint coefficients; both must
         be negative for the runs to agree.
     """
-    stochastic = ("arw",) + tuple(e for e in current.order if e not in DETERMINISTIC)
-    Xb, _ = holdout.design_blocks(current.spec)
-    noise, _, _ = fit_noise(holdout.y, Xb, holdout.basis, current.noise, stochastic)
-    on_holdout = dataclasses.replace(current, noise=noise)
+    on_holdout = _with_own_noise(holdout, current)
 
     def runs_deviance(spec):
         models = (dataclasses.replace(current, spec=spec), dataclasses.replace(on_holdout, spec=spec))
