@@ -26,7 +26,8 @@ Amplitudes (``--draw``):
 
 The pair's evidence is twice the fit run's (the runs share gyro, profile and
 rate; only the temperature-sensor noise differs); its threshold is diagnose's
-``k ln(2 n_blocks) + bic_margin``.
+``k ln(2 n_blocks) + bic_margin``, where a sinusoid's ``k`` counts its
+amplitude and phase once per run (each run re-estimates them).
 
 Prints and writes ``benchmarks/results/diagnose[-absolute][-seedS].json``
 (seed 2024 unsuffixed): the confusion matrix (rows: true effect present,
@@ -179,7 +180,7 @@ class _Detector:
     def threshold(self, effect):
         from gyrocomp.diagnose.detectability import threshold
 
-        return threshold(self.n_pair, effect, self.margin)
+        return threshold(self.n_pair, effect, self.margin, n_runs=2)
 
     def noise(self):
         from gyrocomp.diagnose.likelihood import NoiseModel

@@ -42,7 +42,7 @@ import dataclasses
 import numpy as np
 from scipy import linalg, optimize, stats
 
-from gyrocomp.diagnose.effects import N_PARAMS, STOCHASTIC, effect_columns, polynomial_columns
+from gyrocomp.diagnose.effects import STOCHASTIC, effect_columns, n_params_runs, polynomial_columns
 from gyrocomp.diagnose.likelihood import NoiseModel, block_means
 
 __all__ = [
@@ -57,9 +57,13 @@ __all__ = [
 ]
 
 
-def threshold(n_blocks, effect, bic_margin):
-    """The ``-2 log L`` drop an effect must bring: ``k ln n_blocks + bic_margin``."""
-    return N_PARAMS[effect] * np.log(n_blocks) + bic_margin
+def threshold(n_blocks, effect, bic_margin, n_runs=1):
+    """The ``-2 log L`` drop an effect must bring on `n_runs` runs of `n_blocks` blocks in all: ``k ln n_blocks + bic_margin``.
+
+    ``k`` is :func:`gyrocomp.diagnose.effects.n_params_runs`: on two runs a
+    sinusoid pays for a phase and an amplitude per run.
+    """
+    return n_params_runs(effect, n_runs) * np.log(n_blocks) + bic_margin
 
 
 def deterministic_evidence(problem, contribution_dps, spec, noise: NoiseModel) -> float:
@@ -210,7 +214,7 @@ def detection_limit(runs, model, effect, shape, bic_margin, power=0.95):
         when even the end of the search range would not be found.
     """
     fit = runs[0]
-    thr = threshold(len(runs) * fit.y.size, effect, bic_margin)
+    thr = threshold(len(runs) * fit.y.size, effect, bic_margin, len(runs))
     spec = {k: v for k, v in model.spec.items() if k != effect}
     noise = model.noise
     if effect in STOCHASTIC:

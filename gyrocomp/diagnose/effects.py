@@ -40,6 +40,7 @@ __all__ = [
     "STOCHASTIC",
     "NEEDS_TEMPERATURE",
     "N_PARAMS",
+    "n_params_runs",
     "Run",
     "design",
     "polynomial_columns",
@@ -69,6 +70,21 @@ N_PARAMS = {
 
 PER_RUN = ("offset", "periodic_sin", "periodic_cos")
 """Columns re-estimated on every run."""
+
+
+def n_params_runs(effect: str, n_runs: int) -> int:
+    """Free parameters `effect` adds when fitted on `n_runs` runs together.
+
+    Its :data:`PER_RUN` columns are fitted once per run: a sinusoid whose
+    phase each run re-estimates costs its period plus an amplitude and a
+    phase per run (``3 + 2 (n_runs - 1)``); every other effect costs
+    :data:`N_PARAMS` whatever the number of runs.
+
+    >>> n_params_runs("periodic", 2), n_params_runs("warmup", 2)
+    (5, 2)
+    """
+    per_run = sum(1 for name in PER_RUN if name.startswith(f"{effect}_"))
+    return N_PARAMS[effect] + per_run * (n_runs - 1)
 
 _HOUR = 3600.0
 

@@ -70,6 +70,7 @@ from gyrocomp.diagnose.effects import (
     TemperatureScale,
     design,
     effect_columns,
+    n_params_runs,
     periodic_block_means,
 )
 from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, fit_noise_runs, profile_deviance
@@ -506,9 +507,10 @@ def _swap(fit, holdout, baseline, current, candidates, progress):
 
 
 def _joint_bic(fit: Problem, holdout: Problem, model: Fitted) -> float:
-    """BIC of `model` on both runs: shared coefficients (per-run :data:`PER_RUN` columns), each run's noise fitted on it."""
+    """BIC of `model` on both runs: shared coefficients (per-run :data:`PER_RUN` columns, counted once per run), each run's noise fitted on it."""
     parts = [_JointPart(fit, model, None), _JointPart(holdout, _with_own_noise(holdout, model), None)]
-    return float(_joint_deviance(parts, None, None).sum()) + model.n_params * np.log(fit.y.size + holdout.y.size)
+    k = model.n_params + sum(n in PER_RUN for n in model.names)
+    return float(_joint_deviance(parts, None, None).sum()) + k * np.log(fit.y.size + holdout.y.size)
 
 
 def _with_own_noise(problem: Problem, model: Fitted) -> Fitted:
@@ -723,7 +725,9 @@ def joint_gain(fit: Problem, holdout: Problem, current: Fitted, effect: str):
     parameter is fitted on the sum, then those of the effects already in
     (one coordinate-descent pass, as in :func:`extend`: a warm-up fitted
     alone stretches its time constant over a ramp); the change is
-    ``Delta(-2 log L) + k ln(n_fit + n_holdout)``.
+    ``Delta(-2 log L) + k ln(n_fit + n_holdout)``, with ``k`` from
+    :func:`gyrocomp.diagnose.effects.n_params_runs` (a sinusoid's amplitude
+    and phase, fitted per run, count twice).
 
     The held-out gap of a model selected this way is no longer independent
     of the selection (its parameters are still fitted on the fit run only).
@@ -749,7 +753,7 @@ def joint_gain(fit: Problem, holdout: Problem, current: Fitted, effect: str):
             spec[other] = _best_nonlinear(fit, trial, other, ((holdout, dataclasses.replace(on_holdout, spec=spec)),))
     change = runs_deviance(spec) - before
     n = fit.y.size + holdout.y.size
-    return float(change.sum() + N_PARAMS[effect] * np.log(n)), tuple(float(c) for c in change)
+    return float(change.sum() + n_params_runs(effect, 2) * np.log(n)), tuple(float(c) for c in change)
 
 
 def sample_arw(run: Run) -> float:
