@@ -23,9 +23,21 @@ model ``theta = (N, B, K)`` of the calibrated simulation, the gap is
   Allan deviation of the residual (:func:`gyrocomp.allan.oadev`) and
   ``adev_theta`` the IEEE Std 952 model of the simulation.
 * ``E_0`` is what ``D^2 + S`` is expected to be for a recording that *is*
-  the calibrated simulation: ``var D = 2 / (n - p)`` and
-  ``var ln adev = 1 / (2 edf)`` with ``edf = L / tau - 1`` non-overlapping
-  windows (a conservative count for the overlapping estimator).
+  the calibrated simulation. A sample variance with ``nu`` degrees of
+  freedom is a scaled ``chi^2_nu``, so ``E[ln^2(s^2 / E s^2)] =
+  psi'(nu/2) + (psi(nu/2) - ln(nu/2))^2`` (``~ 2 / nu`` for large ``nu``;
+  ``psi`` the digamma function); ``ln adev`` has a quarter of it. Under
+  white noise ``nu = n - p`` for ``D`` and ``L / tau - 1`` (the
+  non-overlapping window count, a conservative one for the overlapping
+  estimator) at each ``tau``. Flicker and a random walk put their variance
+  in a few slow modes: ``nu`` is then Satterthwaite's
+  ``tr(A)^2 / tr(A^2)`` of the quadratic form ``A`` (the centred ``T_g``
+  means for ``D``; the first differences of the ``tau`` means, relative to
+  their white value, at each ``tau`` with at most :data:`MAX_EDF_WINDOWS`
+  windows) under the model's covariance (:class:`NoiseBasis`). The 100 s
+  spread of a random walk has about 2.5 degrees of freedom whatever the
+  length of the run: without this a perfectly modelled random walk would
+  read as a gap of order 1.
 
 ``G`` is dimensionless (nepers of ADEV or of block-mean spread): 0 means the
 recording is indistinguishable from the simulation within sampling noise,
@@ -34,7 +46,7 @@ to the holdout recording.
 
 Sampling noise alone gives some ``G > 0``: ``noise_level`` is the 95th
 percentile of ``G`` for a recording that *is* the simulation, with ``D``
-and the log ratios taken as independent normals of the variances above and
+and the log ratios taken as independent normals of the second moments above and
 ``D^2 + S`` as a scaled chi-square of the same mean and variance
 (Satterthwaite 1946). A gap below it is no evidence of a mismatch; an
 effect whose gap stays below it is one the likelihood of the selection can
@@ -52,12 +64,15 @@ References
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
+from scipy import linalg, special, stats
 
 from gyrocomp import allan
-from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseModel, block_means
+from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means
 
-__all__ = ["gap", "barnes_b1", "noise_level"]
+__all__ = ["gap", "barnes_b1", "noise_level", "log_chi2_moment", "effective_dof"]
+
+MAX_EDF_WINDOWS = 512
+"""Allan taus with more windows keep the white count (a 512 x 512 covariance per tau at most)."""
 
 
 def barnes_b1(n, mu):
@@ -77,15 +92,47 @@ def barnes_b1(n, mu):
     return n * (1.0 - n**mu) / (2.0 * (n - 1.0) * (1.0 - 2.0**mu))
 
 
+def log_chi2_moment(nu):
+    """``E[ln^2(X / nu)]`` for ``X ~ chi^2_nu``: ``psi'(nu/2) + (psi(nu/2) - ln(nu/2))^2``.
+
+    Examples
+    --------
+    >>> round(float(log_chi2_moment(2.0)), 3), round(float(log_chi2_moment(1000.0)) * 1000.0 / 2.0, 3)
+    (1.978, 1.002)
+    """
+    half = 0.5 * np.asarray(nu, dtype=float)
+    return special.polygamma(1, half) + (special.digamma(half) - np.log(half)) ** 2
+
+
+def effective_dof(form, covariance):
+    """Satterthwaite's degrees of freedom ``tr(A)^2 / tr(A^2)`` of ``v' Q v``, ``v ~ N(0, covariance)``, ``A = Q covariance``.
+
+    Parameters
+    ----------
+    form : ndarray, shape (k, n)
+        ``F`` with ``Q = F' F`` (the quadratic form is ``|F v|^2``).
+    covariance : ndarray, shape (n, n)
+
+    Examples
+    --------
+    >>> x = np.eye(5) - 1.0 / 5  # the centred values of 5 white samples: n - 1
+    >>> round(effective_dof(x, np.eye(5)), 6)
+    4.0
+    """
+    a = form @ covariance @ form.T
+    return float(np.trace(a) ** 2 / np.sum(a * a))
+
+
 def noise_level(variances, quantile=0.95):
     """Quantile of ``G`` for a recording that is the simulation (module docstring).
 
     Parameters
     ----------
     variances : sequence of float
-        ``var D`` (or nothing when ``D`` is not computed), then the variance
-        of each log ratio, ``1 / (2 edf)``, divided by the number of taus
-        (the stochastic part is their mean).
+        ``E[D^2]`` (or nothing when ``D`` is not computed), then the second
+        moment of each log ratio divided by the number of taus (the
+        stochastic part is their mean): the ``E_0`` terms of the module
+        docstring.
     quantile : float, default=0.95
 
     Returns
@@ -140,6 +187,7 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
     means = block_means(r, n_per)
     t_g = n_per / fs_hz
     n = means.size
+    colored = bool(noise.bias_instability or noise.rate_random_walk)
     variances = []
     if n - n_fitted >= 2:
         s2 = float(np.var(means, ddof=1)) * (n - 1) / (n - n_fitted)
@@ -149,7 +197,7 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
             + barnes_b1(n, 1) * noise.rate_random_walk**2 * t_g / 3.0
         )
         d = float(np.log(max(s2, 1e-300) / expected))
-        variances.append(2.0 / (n - n_fitted))
+        variances.append(_spread_log_moment(noise, n, t_g, n_fitted))
     else:
         d = 0.0
     tau, adev, _ = allan.oadev(r, fs_hz, "octave")
@@ -159,7 +207,8 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
     log_ratio = np.log(np.maximum(adev, 1e-300) / model)
     s = float(np.mean(log_ratio**2)) if tau.size else 0.0
     if tau.size:
-        variances += list(1.0 / (2.0 * (length_s / tau - 1.0)) / tau.size)
+        edf = (length_s / tau - 1.0) * np.array([_colored_dof_ratio(noise, length_s, t) if colored else 1.0 for t in tau])
+        variances += list(0.25 * log_chi2_moment(edf) / tau.size)
     floor = float(np.sum(variances))
     return {
         "total": float(np.sqrt(max(0.0, d * d + s - floor))),
@@ -169,3 +218,41 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
         "noise_level": noise_level(variances),
         "timescale": {"tau_s": tau, "adev": adev, "adev_model": model, "log_ratio": log_ratio},
     }
+
+
+def _spread_log_moment(noise: NoiseModel, n, t_g, n_fitted, draws=2000, seed=0):
+    """``E[D^2]`` for a recording that is the simulation: ``D = ln(s^2 / E s^2)`` of `n` means of `t_g` seconds.
+
+    White noise alone makes ``s^2`` a scaled ``chi^2_{n - p}``
+    (:func:`log_chi2_moment`). With flicker or a random walk ``s^2`` is
+    ``sum lambda_j z_j^2 / (n - 1)`` over the eigenvalues ``lambda_j`` of
+    the centred means' covariance: a few slow modes carry most of it, the
+    white part sets a floor under it (so no ``chi^2`` of Satterthwaite's
+    degrees of freedom has its log moments); the moment is averaged over
+    `draws` normal vectors from ``numpy.random.default_rng(seed)``. Up to
+    :data:`MAX_EDF_WINDOWS` means exactly; a longer record is judged on fewer,
+    longer means (more weight to the coloured terms: an upper bound).
+    """
+    if not (noise.bias_instability or noise.rate_random_walk):
+        return float(log_chi2_moment(n - n_fitted))
+    merge = -(-n // MAX_EDF_WINDOWS)
+    k = n // merge
+    centre = np.eye(k) - 1.0 / k
+    lam = np.clip(linalg.eigvalsh(centre @ NoiseBasis(k, t_g * merge).covariance(noise) @ centre), 0.0, None)
+    z = np.random.default_rng(seed).standard_normal((draws, k))
+    return float(np.mean(np.log((z * z) @ lam / lam.sum()) ** 2))
+
+
+def _colored_dof_ratio(noise: NoiseModel, length_s, tau_s):
+    """Degrees of freedom of the Allan variance at `tau_s` under `noise`, relative to white noise alone.
+
+    Both from the non-overlapping estimator (first differences of the
+    ``tau`` means); 1 where the record holds more than
+    :data:`MAX_EDF_WINDOWS` windows.
+    """
+    m = int(length_s // tau_s)
+    if m > MAX_EDF_WINDOWS or m < 3:
+        return 1.0
+    diff = np.diff(np.eye(m), axis=0)
+    basis = NoiseBasis(m, tau_s)
+    return effective_dof(diff, basis.covariance(noise)) / effective_dof(diff, basis.white)
