@@ -30,14 +30,15 @@ model ``theta = (N, B, K)`` of the calibrated simulation, the gap is
   white noise ``nu = n - p`` for ``D`` and ``L / tau - 1`` (the
   non-overlapping window count, a conservative one for the overlapping
   estimator) at each ``tau``. Flicker and a random walk put their variance
-  in a few slow modes: ``nu`` is then Satterthwaite's
-  ``tr(A)^2 / tr(A^2)`` of the quadratic form ``A`` (the centred ``T_g``
-  means for ``D``; the first differences of the ``tau`` means, relative to
-  their white value, at each ``tau`` with at most :data:`MAX_EDF_WINDOWS`
-  windows) under the model's covariance (:class:`NoiseBasis`). The 100 s
-  spread of a random walk has about 2.5 degrees of freedom whatever the
-  length of the run: without this a perfectly modelled random walk would
-  read as a gap of order 1.
+  in a few slow modes, under a floor that the white part sets: for ``D``
+  the moment is averaged over draws of ``sum lambda_j z_j^2`` with the
+  eigenvalues ``lambda_j`` of the centred ``T_g`` means' covariance under
+  the model (:class:`NoiseBasis`); at each ``tau`` with at most
+  :data:`MAX_EDF_WINDOWS` windows ``nu`` is scaled by Satterthwaite's
+  ``tr(A)^2 / tr(A^2)`` of the first differences of the ``tau`` means,
+  relative to its white value. The 100 s spread of a random walk has about
+  three degrees of freedom whatever the length of the run: with the white
+  count a perfectly modelled random walk read as a gap of order 1.
 
 ``G`` is dimensionless (nepers of ADEV or of block-mean spread): 0 means the
 recording is indistinguishable from the simulation within sampling noise,
@@ -72,7 +73,8 @@ from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, b
 __all__ = ["gap", "barnes_b1", "noise_level", "log_chi2_moment", "effective_dof"]
 
 MAX_EDF_WINDOWS = 512
-"""Allan taus with more windows keep the white count (a 512 x 512 covariance per tau at most)."""
+"""Largest covariance the coloured-noise terms of ``E_0`` build (512 x 512): Allan taus with more
+windows keep the white count; a longer 100 s spread is judged on fewer, longer means."""
 
 
 def barnes_b1(n, mu):
@@ -231,7 +233,10 @@ def _spread_log_moment(noise: NoiseModel, n, t_g, n_fitted, draws=2000, seed=0):
     degrees of freedom has its log moments); the moment is averaged over
     `draws` normal vectors from ``numpy.random.default_rng(seed)``. Up to
     :data:`MAX_EDF_WINDOWS` means exactly; a longer record is judged on fewer,
-    longer means (more weight to the coloured terms: an upper bound).
+    longer means (more weight to the coloured terms: an upper bound). The
+    coefficients fitted beyond the offset are counted in the white case only
+    (a polynomial in temperature takes a little of a random walk's slowest
+    modes, which this moment then slightly overstates).
     """
     if not (noise.bias_instability or noise.rate_random_walk):
         return float(log_chi2_moment(n - n_fitted))
