@@ -189,7 +189,6 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
     means = block_means(r, n_per)
     t_g = n_per / fs_hz
     n = means.size
-    colored = bool(noise.bias_instability or noise.rate_random_walk)
     variances = []
     if n - n_fitted >= 2:
         s2 = float(np.var(means, ddof=1)) * (n - 1) / (n - n_fitted)
@@ -209,7 +208,7 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
     log_ratio = np.log(np.maximum(adev, 1e-300) / model)
     s = float(np.mean(log_ratio**2)) if tau.size else 0.0
     if tau.size:
-        edf = (length_s / tau - 1.0) * np.array([_colored_dof_ratio(noise, length_s, t) if colored else 1.0 for t in tau])
+        edf = (length_s / tau - 1.0) * np.array([_colored_dof_ratio(noise, length_s, t) for t in tau])
         variances += list(0.25 * log_chi2_moment(edf) / tau.size)
     floor = float(np.sum(variances))
     return {
@@ -252,11 +251,11 @@ def _colored_dof_ratio(noise: NoiseModel, length_s, tau_s):
     """Degrees of freedom of the Allan variance at `tau_s` under `noise`, relative to white noise alone.
 
     Both from the non-overlapping estimator (first differences of the
-    ``tau`` means); 1 where the record holds more than
-    :data:`MAX_EDF_WINDOWS` windows.
+    ``tau`` means); 1 for white noise alone and where the record holds more
+    than :data:`MAX_EDF_WINDOWS` windows.
     """
     m = int(length_s // tau_s)
-    if m > MAX_EDF_WINDOWS or m < 3:
+    if not (noise.bias_instability or noise.rate_random_walk) or m > MAX_EDF_WINDOWS or m < 3:
         return 1.0
     diff = np.diff(np.eye(m), axis=0)
     basis = NoiseBasis(m, tau_s)
