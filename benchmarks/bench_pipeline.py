@@ -25,7 +25,7 @@ ROOT = HERE.parent
 
 def main(quick: bool) -> dict:
     from gyrocomp import io
-    from gyrocomp.pipeline.run import run
+    from gyrocomp.commands import run as run_command
 
     train = ROOT / "sample_data" / "oven_train.parquet"
     test = ROOT / "sample_data" / "oven_test.parquet"
@@ -38,7 +38,8 @@ def main(quick: bool) -> dict:
                 io.write_table(paths[-1], rec.data.iloc[:10800], {})
             train, test = paths
         start = time.perf_counter()
-        report = run(ROOT / "configs" / "compare.toml", train, Path(folder) / "out", test_path=test, workers=2)
+        options = run_command.Options(test=test, workers=2)
+        report = run_command.to_files([ROOT / "configs" / "compare.toml", train], Path(folder) / "out", options)
         wall = time.perf_counter() - start
     methods = {}
     for m in report["methods"]:

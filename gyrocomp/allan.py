@@ -44,7 +44,6 @@ __all__ = [
     "oadev",
     "analyse",
     "allan_artefact",
-    "write_report",
     "plot_allan",
     "check_thresholds",
 ]
@@ -303,66 +302,6 @@ def allan_artefact(series: Sequence[AllanSeries], *, inputs: list[dict], setting
 
     header = artefact_header("gyrocomp.allan", inputs=inputs, settings=settings)
     return {**header, "series": [s.to_dict() for s in series]}
-
-
-def write_report(
-    recordings: Sequence[str | os.PathLike],
-    out: str | os.PathLike,
-    *,
-    column: str = "rate",
-    taus=None,
-    settings: AllanConfig = AllanConfig(),
-    columns=None,
-    resample: bool = False,
-) -> list[AllanSeries]:
-    """Read recordings, analyse one column of each and write ``allan.json``.
-
-    The sequence ``gyrocomp allan`` and ``gyrocomp batch allan`` share:
-    each recording is read (:func:`gyrocomp.io.read_recording`), its
-    `column` analysed (:func:`analyse`), and every series written to `out`
-    (``-`` is stdout) as :func:`allan_artefact`. The plot
-    (:func:`plot_allan`) and the thresholds (:func:`check_thresholds`)
-    are left to the caller.
-
-    Parameters
-    ----------
-    recordings : sequence of path-like
-        CSV or Parquet recordings (``-`` reads CSV from stdin).
-    out : path-like
-        ``allan.json`` to write.
-    column : str, default="rate"
-        Column to analyse, after mapping.
-    taus : str or sequence of float or None
-        Averaging times; ``None`` takes ``settings.taus``.
-    settings : AllanConfig
-    columns : gyrocomp.io.ColumnSpec or None
-        Column names and units of the recordings (``None``: the defaults).
-    resample : bool, default=False
-        Interpolate a jittered time axis instead of refusing it.
-
-    Returns
-    -------
-    list of AllanSeries
-    """
-    from pathlib import Path
-
-    from gyrocomp import io
-    from gyrocomp.config import settings_dict
-
-    spec = columns or io.ColumnSpec()
-    source = {"time": spec.time, "rate": spec.rate, "temperature": spec.temperature}.get(column, column)
-    usecols = list(dict.fromkeys([spec.time, spec.rate, source]))  # the only columns read
-    series, inputs = [], []
-    for path in recordings:
-        rec = io.read_recording(path, spec, min_samples=3, resample=resample, usecols=usecols)
-        if column not in rec.columns:
-            raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
-        series.append(analyse(rec.column(column), rec.fs_hz, taus=taus, name=Path(rec.name).name, column=column, settings=settings))
-        inputs.append(rec.input_record())
-        del rec
-    resolved = {**settings_dict(settings), "taus": taus or settings.taus, "column": column}
-    io.write_json(out, allan_artefact(series, inputs=inputs, settings=resolved))
-    return series
 
 
 def check_thresholds(

@@ -26,7 +26,6 @@ __all__ = [
     "classify",
     "class_of",
     "entropy_of",
-    "write_classes",
     "plot_entropies",
 ]
 
@@ -164,66 +163,6 @@ def class_of(value: float, settings: ClassifySettings = ClassifySettings()) -> s
     if value < settings.drift_below:
         return "drift"
     return "mixed"
-
-
-def write_classes(
-    components: str | os.PathLike,
-    settings: ClassifySettings,
-    out: str | os.PathLike,
-    *,
-    plot: str | os.PathLike | None = None,
-) -> list[dict]:
-    """Read ``components.parquet``, classify its components and write ``classes.json``.
-
-    The sequence ``gyrocomp classify`` and the parallel pipelines
-    (:func:`gyrocomp.pipeline.run.decompose_and_classify`) share.
-
-    Parameters
-    ----------
-    components : path-like
-        ``components.parquet`` (schema ``gyrocomp.components``) whose header
-        lists the component columns.
-    settings : ClassifySettings
-    out : path-like
-        ``classes.json`` to write (``-``: stdout): the header (input: the
-        components file's name and SHA-256), ``entropy`` (kind and its
-        settings), ``thresholds`` and ``components`` (:func:`classify`).
-    plot : path-like or None
-        PNG of :func:`plot_entropies` to write as well.
-
-    Returns
-    -------
-    list of dict
-        The entries of :func:`classify`.
-
-    Raises
-    ------
-    InputError
-        The header lists no components, or a listed column is missing.
-    """
-    import hashlib
-    from pathlib import Path
-
-    from gyrocomp import io
-    from gyrocomp.config import settings_dict
-
-    frame, header = io.read_table(components, "gyrocomp.components")
-    names = header.get("components")
-    if not isinstance(names, list) or not names:
-        raise InputError(f"{components}: header lists no `components`")
-    missing = [n for n in names if n not in frame.columns]
-    if missing:
-        raise InputError(f"{components}: component column {missing[0]!r} listed in the header is missing")
-    entries = classify(frame[names].to_numpy(dtype=float).T, names, settings)
-    sha = hashlib.sha256(Path(components).read_bytes()).hexdigest()
-    result = io.artefact_header(CLASSES_SCHEMA, inputs=[{"name": Path(components).name, "sha256": sha}], settings=settings_dict(settings))
-    result["entropy"] = {"kind": settings.entropy, **dataclasses.asdict(settings.active)}
-    result["thresholds"] = {"noise_above": settings.noise_above, "drift_below": settings.drift_below}
-    result["components"] = entries
-    io.write_json(out, result)
-    if plot is not None:
-        plot_entropies(entries, settings, plot)
-    return entries
 
 
 def plot_entropies(entries: Sequence[dict], settings: ClassifySettings, path: str | os.PathLike) -> None:

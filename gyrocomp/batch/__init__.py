@@ -33,7 +33,7 @@ import os
 from pathlib import Path
 from typing import Callable, Iterator, Sequence
 
-from gyrocomp.batch.jobs import JOBS, get_job, process_input
+from gyrocomp.batch.jobs import JOBS, get_job, process_input, resolve
 from gyrocomp.errors import InputError
 
 __all__ = ["BatchResult", "run_batch", "expand_inputs", "folder_names", "SUMMARY_SCHEMA", "JOBS"]
@@ -126,10 +126,10 @@ def run_batch(
     paths = [p for p in expand_inputs(inputs) if not _inside(p, out)]
     if not paths:
         raise InputError(f"batch: no recording matches {', '.join(map(str, inputs)) or '(nothing given)'}")
-    chosen = _options(job, options or {})
-    files = {**(files or {}), **{key: chosen.pop(key) for key in job.file_options}}
+    given = dict(options or {})
+    files = {**(files or {}), **{key: given.pop(key) for key in job.file_options if key in given}}
     files = {key: _absolute(value) for key, value in files.items() if value is not None}
-    settings = job.resolve(chosen, files)
+    settings = resolve(job, given, files)
     out.mkdir(parents=True, exist_ok=True)
     names = folder_names(paths)
     tasks = [
@@ -205,14 +205,6 @@ def _inside(path: str, folder: Path) -> bool:
 def _absolute(value) -> str:
     """An existing file as an absolute path (workers may run elsewhere); a bare config name as is."""
     return os.path.abspath(value) if os.path.exists(value) else os.fspath(value)
-
-
-def _options(job, given: dict) -> dict:
-    unknown = sorted(set(given) - set(job.options))
-    if unknown:
-        names = ", ".join("--" + key.replace("_", "-") for key in unknown)
-        raise InputError(f"batch {job.name}: {names} not available in a batch; it passes {', '.join('--' + k.replace('_', '-') for k in job.options)}")
-    return {**job.options, **given}
 
 
 def _worker_died(task: dict, err: BaseException) -> dict:

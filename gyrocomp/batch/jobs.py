@@ -1,17 +1,19 @@
 """One job per batchable command: what it accepts, what it writes, what it reports.
 
-A :class:`Job` has two halves:
+A batch runs a stage's ``to_files`` (:mod:`gyrocomp.commands`) once per
+input, with the stage's ``Options``: the options a batch passes through
+and their defaults are the stage's own, never restated here. A
+:class:`Job` adds what is particular to a batch:
 
-* :attr:`Job.resolve` runs once, in the calling process: it checks the
-  command's options, loads the configs and hashes the files they name,
-  and returns the *settings*: a JSON-able dict that fully determines the
-  outputs of one input. The settings go into every manifest, so changing
-  any of them (or the model file, or a config's contents) redoes the
-  inputs.
-* :attr:`Job.execute` runs once per input, in a worker: it reads the
-  input, calls the stage's library function, writes the artefacts into
-  the folder it is given and returns the summary's key figures and the
-  CI threshold message (``""`` when no bound was crossed).
+* :func:`resolve` runs once, in the calling process: it builds the
+  options, loads the configs and hashes the files they name, and returns
+  the *settings*: a JSON-able dict that fully determines the outputs of
+  one input. The settings go into every manifest, so changing any of them
+  (or the model file, or a config's contents) redoes the inputs.
+* :attr:`Job.execute` runs once per input, in a worker: it calls the
+  stage's ``to_files`` into the folder it is given and returns the
+  summary's key figures and the CI threshold message (``""`` when no
+  bound was crossed).
 
 :func:`process_input` is the worker's whole task: up-to-date check, the
 stage into a hidden temporary folder, the manifest last, the rename into
@@ -39,21 +41,12 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import threading
-import warnings
 from pathlib import Path
 from typing import Callable
 
 from gyrocomp.errors import GyrocompError, InputError, ThresholdError
 
-__all__ = ["Job", "JOBS", "get_job", "process_input", "paired_path"]
-
-_PLOT_LOCK = threading.Lock()
-"""Matplotlib is not thread-safe (its mathtext parser is shared): a Dask worker
-runs several inputs as threads of one process, so plots are drawn one at a time."""
-
-_COLUMN_OPTIONS = {"time_col": "time", "rate_col": "rate", "temp_col": "temperature", "time_unit": "s", "rate_unit": "deg/s", "temp_unit": "degC"}
-"""The column options every recording-reading command shares, with their defaults."""
+__all__ = ["Job", "JOBS", "get_job", "resolve", "process_input", "paired_path"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -63,16 +56,16 @@ class Job:
     Attributes
     ----------
     name : str
-        The command's name (``gyrocomp <name>``).
-    options : dict
-        Options of the command that a batch passes through (Python names,
-        as in the command's signature) and their defaults (the command's);
-        anything else is refused.
-    resolve : callable(options: dict, files: dict) -> dict
-        Options (and the batch's files, e.g. ``model``, ``config``) to settings.
-    execute : callable(input: Path, folder: Path, settings: dict, files: dict) -> (dict, str)
+        The command's name (``gyrocomp <name>``), also its stage in :mod:`gyrocomp.commands`.
+    execute : callable(input: Path, folder: Path, options, files: dict) -> (dict, str)
         Run the stage for one input into `folder`; return the key figures
         and the CI threshold message.
+    owned : tuple of str
+        Options of the stage that the batch sets itself (outputs, workers,
+        the files of its own options); the others pass through.
+    resolve : callable(options, files: dict) -> dict
+        What else determines the outputs: the configs' contents, the
+        files' SHA-256.
     file_options : tuple of str
         Options that name a file every input uses; they travel in `files`
         (as absolute paths), and the settings hold their SHA-256.
@@ -82,11 +75,25 @@ class Job:
     """
 
     name: str
-    options: dict
-    resolve: Callable[[dict, dict], dict]
-    execute: Callable[[Path, Path, dict, dict], tuple[dict, str]]
+    execute: Callable
+    owned: tuple = ()
+    resolve: Callable[[object, dict], dict] = lambda options, files: {}
     file_options: tuple = ()
     preload: tuple = ()
+
+    @property
+    def options_class(self):
+        """The stage's ``Options`` dataclass."""
+        from gyrocomp.commands import stage
+
+        return stage(self.name).Options
+
+    @property
+    def options(self) -> tuple[str, ...]:
+        """Command-line parameter names (Python names) a batch passes through to the stage."""
+        from gyrocomp.commands import param_names
+
+        return tuple(name for name in param_names(self.options_class) if name not in self.owned)
 
 
 def get_job(command: str) -> Job:
@@ -97,6 +104,24 @@ def get_job(command: str) -> Job:
         raise InputError(f"batch: unknown command {command!r}; choose one of {', '.join(JOBS)}") from None
 
 
+def resolve(job: Job, given: dict, files: dict) -> dict:
+    """The settings of a batch: the stage's options (`given` over its defaults) and what :attr:`Job.resolve` adds.
+
+    Raises
+    ------
+    InputError
+        An option the batch does not pass through.
+    """
+    from gyrocomp.commands import from_params, to_settings
+
+    unknown = sorted(set(given) - set(job.options))
+    if unknown:
+        names = ", ".join("--" + key.replace("_", "-") for key in unknown)
+        raise InputError(f"batch {job.name}: {names} not available in a batch; it passes {', '.join('--' + k.replace('_', '-') for k in job.options)}")
+    options = from_params(job.options_class, given)
+    return {"options": to_settings(options), **job.resolve(options, files)}
+
+
 def process_input(task: dict) -> dict:
     """Bring one input's output folder up to date; never raises for a bad input.
 
@@ -104,7 +129,7 @@ def process_input(task: dict) -> dict:
     ----------
     task : dict
         ``command``, ``input`` (as listed), ``path`` (to open), ``name`` (folder name under
-        ``out_dir``), ``out_dir``, ``settings`` (from :attr:`Job.resolve`)
+        ``out_dir``), ``out_dir``, ``settings`` (from :func:`resolve`)
         and ``files`` (absolute paths of the files the settings name).
 
     Returns
@@ -117,6 +142,7 @@ def process_input(task: dict) -> dict:
         the input, ``""`` when unreadable), ``figures``.
     """
     from gyrocomp.batch import manifest as mf
+    from gyrocomp.commands import from_settings
 
     job = get_job(task["command"])
     out_dir = Path(task["out_dir"])
@@ -136,7 +162,8 @@ def process_input(task: dict) -> dict:
             outcome.update(status="skipped", figures=done["figures"], threshold=done["threshold"])
             return outcome
         tmp = mf.new_folder(out_dir, task["name"])
-        figures, threshold = job.execute(source, tmp, task["settings"], task["files"])
+        options = from_settings(job.options_class, task["settings"]["options"])
+        figures, threshold = job.execute(source, tmp, options, task["files"])
         mf.write_manifest(tmp, command=job.name, input_name=source.name, input_sha256=sha, settings=task["settings"], figures=figures, threshold=threshold)
         mf.commit_folder(tmp, out_dir / task["name"])
         tmp = None
@@ -154,24 +181,6 @@ def _one_line(err: BaseException) -> str:
     return message if isinstance(err, GyrocompError) else f"{type(err).__name__}: {message}"
 
 
-def _columns(options: dict) -> dict:
-    return {key: options[key] for key in _COLUMN_OPTIONS}
-
-
-def _column_spec(settings: dict):
-    from gyrocomp.io import ColumnSpec
-
-    c = settings["columns"]
-    return ColumnSpec(
-        time=c["time_col"],
-        rate=c["rate_col"],
-        temperature=c["temp_col"],
-        time_unit=c["time_unit"],
-        rate_unit=c["rate_unit"],
-        temperature_unit=c["temp_unit"],
-    )
-
-
 def _file_identity(path: str | os.PathLike, what: str) -> dict:
     """``{name, sha256}`` of a file a batch depends on (model, config)."""
     from gyrocomp.batch.manifest import file_sha256
@@ -182,44 +191,6 @@ def _file_identity(path: str | os.PathLike, what: str) -> dict:
         raise InputError(f"{what} {path}: {err.strerror or err}") from None
 
 
-# ---------------------------------------------------------------- allan
-
-def _allan_resolve(options: dict, files: dict) -> dict:
-    from gyrocomp import allan as al
-    from gyrocomp.config import settings_dict
-
-    config = al.get_config(files.get("config") or "allan")
-    return {
-        "allan": {**settings_dict(config), "taus": options["taus"] or config.taus, "column": options["column"]},
-        "columns": _columns(options),
-        "resample": options["resample"],
-        "thresholds": {key: options[key] for key in ("max_arw", "max_bias_instability", "max_rrw")},
-    }
-
-
-def _allan_execute(source: Path, folder: Path, settings: dict, files: dict) -> tuple[dict, str]:
-    from gyrocomp import allan as al
-
-    config = al.get_config(files.get("config") or "allan")
-    series = al.write_report(
-        [source],
-        folder / "allan.json",
-        column=settings["allan"]["column"],
-        taus=settings["allan"]["taus"],
-        settings=config,
-        columns=_column_spec(settings),
-        resample=settings["resample"],
-    )
-    with _PLOT_LOCK:
-        al.plot_allan(series, folder / "allan.png")
-    figures = {}
-    for key in ("arw", "bias_instability", "rrw"):
-        term = series[0].terms[key]
-        figures[f"{key}_fit"] = term["value"]
-        figures[f"{key}_readoff"] = term.get("readoff")
-    return figures, _threshold(al.check_thresholds, series, **settings["thresholds"])
-
-
 def _threshold(check, *args, **kwargs) -> str:
     try:
         check(*args, **kwargs)
@@ -228,37 +199,45 @@ def _threshold(check, *args, **kwargs) -> str:
     return ""
 
 
+# ---------------------------------------------------------------- allan
+
+def _allan_resolve(options, files: dict) -> dict:
+    from gyrocomp import allan as al
+    from gyrocomp.config import settings_dict
+
+    return {"allan": settings_dict(al.get_config(files.get("config") or options.config))}
+
+
+def _allan_execute(source: Path, folder: Path, options, files: dict) -> tuple[dict, str]:
+    from gyrocomp.commands import allan as stage
+
+    options = dataclasses.replace(options, config=files.get("config") or options.config, plot=folder / "allan.png")
+    series = stage.to_files([source], folder / "allan.json", options)
+    figures = {}
+    for key in ("arw", "bias_instability", "rrw"):
+        term = series[0].terms[key]
+        figures[f"{key}_fit"] = term["value"]
+        figures[f"{key}_readoff"] = term.get("readoff")
+    return figures, _threshold(stage.check, series, options)
+
+
 # ---------------------------------------------------------------- compensate
 
-def _compensate_resolve(options: dict, files: dict) -> dict:
+def _compensate_resolve(options, files: dict) -> dict:
     from gyrocomp.pipeline.compensate import MODES
 
     if not files.get("model"):
         raise InputError("batch compensate: needs --model model.json")
-    if options["mode"] not in MODES:
-        raise InputError(f"batch compensate: --mode {options['mode']!r}; choose one of {', '.join(MODES)}")
-    return {
-        "mode": options["mode"],
-        "seed": options["seed"],
-        "model": _file_identity(files["model"], "--model"),
-        "columns": _columns(options),
-        "resample": options["resample"],
-    }
+    if options.mode not in MODES:
+        raise InputError(f"batch compensate: --mode {options.mode!r}; choose one of {', '.join(MODES)}")
+    return {"model": _file_identity(files["model"], "--model")}
 
 
-def _compensate_execute(source: Path, folder: Path, settings: dict, files: dict) -> tuple[dict, str]:
+def _compensate_execute(source: Path, folder: Path, options, files: dict) -> tuple[dict, str]:
+    from gyrocomp.commands import compensate as stage
     from gyrocomp.pipeline import evaluate
-    from gyrocomp.pipeline.run import compensate_to_files
 
-    frame, summary, rec, caught = compensate_to_files(
-        source,
-        files["model"],
-        folder / "compensated.parquet",
-        mode=settings["mode"],
-        seed=settings["seed"],
-        columns=_column_spec(settings),
-        resample=settings["resample"],
-    )
+    frame, summary, rec, caught = stage.to_files([source, files["model"]], folder / "compensated.parquet", options)
     figures = {}
     for column in ("compensated", "rate"):
         try:
@@ -273,23 +252,18 @@ def _compensate_execute(source: Path, folder: Path, settings: dict, files: dict)
 
 # ---------------------------------------------------------------- run
 
-def _run_resolve(options: dict, files: dict) -> dict:
+def _run_resolve(options, files: dict) -> dict:
+    from gyrocomp.commands.run import load_run_config
     from gyrocomp.config import load_config, settings_dict
-    from gyrocomp.pipeline.run import load_run_config
 
     if not files.get("config"):
         raise InputError("batch run: needs --config (a run config such as compare)")
-    run_settings, eval_settings, signal_settings, _ = load_run_config(files["config"], options["assignments"] or ())
-    methods = {method: load_config(method) for method in run_settings.methods}
+    run_settings, eval_settings, signal_settings, _ = load_run_config(files["config"], options.overrides)
     return {
         "run": settings_dict(run_settings),
         "evaluate": settings_dict(eval_settings),
         "signal": settings_dict(signal_settings),
-        "methods": methods,
-        "overrides": list(options["assignments"] or ()),
-        "test": options["test"],
-        "seed": options["seed"],
-        "columns": _columns(options),
+        "methods": {method: load_config(method) for method in run_settings.methods},
     }
 
 
@@ -316,21 +290,11 @@ def _paired(template: str | None, source: Path, option: str) -> Path | None:
     return path
 
 
-def _run_execute(source: Path, folder: Path, settings: dict, files: dict) -> tuple[dict, str]:
-    from gyrocomp.pipeline.run import run
+def _run_execute(source: Path, folder: Path, options, files: dict) -> tuple[dict, str]:
+    from gyrocomp.commands import run as stage
 
-    test = _paired(settings["test"], source, "--test")
-    with _PLOT_LOCK:  # the report's plot uses pyplot: a threaded Dask worker runs one unit at a time
-        report = run(
-            files["config"],
-            source,
-            folder,
-            test_path=test,
-            seed=settings["seed"],
-            workers=1,
-            overrides=settings["overrides"],
-            columns=_column_spec(settings),
-        )
+    options = dataclasses.replace(options, test=_paired(options.test, source, "--test"), workers=1)
+    report = stage.to_files([files["config"], source], folder, options)
     figures = {"held_out": bool(report["test"]["held_out"])}
     for row in report["rows"]:
         label = row["method"] if row["mode"] is None else f"{row['method']}_{row['mode']}"
@@ -343,35 +307,28 @@ def _run_execute(source: Path, folder: Path, settings: dict, files: dict) -> tup
 
 # ---------------------------------------------------------------- diagnose
 
-def _diagnose_resolve(options: dict, files: dict) -> dict:
+def _diagnose_resolve(options, files: dict) -> dict:
     from gyrocomp.config import settings_dict
     from gyrocomp.diagnose import get_config
 
     return {
-        "diagnose": settings_dict(get_config(files.get("config") or "diagnose")),
-        "holdout": options["holdout"],
+        "diagnose": settings_dict(get_config(files.get("config") or options.config)),
         "sim": None if files.get("sim") is None else _file_identity(files["sim"], "--sim"),
-        "columns": _columns(options),
-        "resample": options["resample"],
     }
 
 
-def _diagnose_execute(source: Path, folder: Path, settings: dict, files: dict) -> tuple[dict, str]:
-    from gyrocomp.diagnose import get_config
-    from gyrocomp.diagnose.report import plot_gap, write_report
+def _diagnose_execute(source: Path, folder: Path, options, files: dict) -> tuple[dict, str]:
+    from gyrocomp.commands import diagnose as stage
 
-    report = write_report(
-        source,
-        folder / "report.json",
-        holdout=_paired(settings["holdout"], source, "--holdout"),
-        settings=get_config(files.get("config") or "diagnose"),
+    options = dataclasses.replace(
+        options,
+        holdout=_paired(options.holdout, source, "--holdout"),
         sim=files.get("sim"),
-        columns=_column_spec(settings),
-        resample=settings["resample"],
+        config=files.get("config") or options.config,
+        plot=folder / "gap.png",
         markdown=folder / "report.md",
     )
-    with _PLOT_LOCK:
-        plot_gap(report, folder / "gap.png")
+    report = stage.to_files([source], folder / "report.json", options)
     gap = report["gap"]
     figures = {
         "selected_effects": " ".join(report["selected_effects"]),
@@ -386,27 +343,20 @@ def _diagnose_execute(source: Path, folder: Path, settings: dict, files: dict) -
 JOBS: dict[str, Job] = {
     "allan": Job(
         "allan",
-        {"column": "rate", "taus": None, "max_arw": None, "max_bias_instability": None, "max_rrw": None, **_COLUMN_OPTIONS, "resample": False},
-        _allan_resolve,
         _allan_execute,
+        owned=("config", "plot"),
+        resolve=_allan_resolve,
         preload=("gyrocomp.allan", "matplotlib.figure", "matplotlib.backends.backend_agg"),
     ),
-    "compensate": Job(
-        "compensate",
-        {"mode": "causal", "seed": None, **_COLUMN_OPTIONS, "resample": False},
-        _compensate_resolve,
-        _compensate_execute,
-        preload=("gyrocomp.pipeline",),
-    ),
-    "run": Job(
-        "run",
-        {"test": None, "seed": 0, "assignments": None, **_COLUMN_OPTIONS},
-        _run_resolve,
-        _run_execute,
-        preload=("gyrocomp.pipeline", "matplotlib.pyplot"),
-    ),
+    "compensate": Job("compensate", _compensate_execute, owned=("workers",), resolve=_compensate_resolve, preload=("gyrocomp.pipeline",)),
+    "run": Job("run", _run_execute, owned=("workers",), resolve=_run_resolve, preload=("gyrocomp.pipeline", "matplotlib.pyplot")),
     "diagnose": Job(
-        "diagnose", {"holdout": None, "sim": None, **_COLUMN_OPTIONS, "resample": False}, _diagnose_resolve, _diagnose_execute, ("sim",), ("gyrocomp.diagnose", "matplotlib.pyplot")
+        "diagnose",
+        _diagnose_execute,
+        owned=("config", "plot", "markdown"),
+        resolve=_diagnose_resolve,
+        file_options=("sim",),
+        preload=("gyrocomp.diagnose", "matplotlib.pyplot"),
     ),
 }
 """The batchable commands by name."""

@@ -137,17 +137,3 @@ Resample = Annotated[
     bool,
     typer.Option("--resample", help="Interpolate a jittered or gapped time axis onto a uniform grid instead of refusing it."),
 ]
-
-
-def column_spec(time_col: str, rate_col: str, temp_col: str, time_unit: str, rate_unit: str, temp_unit: str):
-    """Build the :class:`gyrocomp.io.ColumnSpec` of the shared options."""
-    from gyrocomp.io import ColumnSpec
-
-    return ColumnSpec(
-        time=time_col,
-        rate=rate_col,
-        temperature=temp_col,
-        time_unit=time_unit,
-        rate_unit=rate_unit,
-        temperature_unit=temp_unit,
-    )

@@ -16,7 +16,6 @@ from gyrocomp.cli._app import (
     TimeCol,
     TimeUnit,
     app,
-    column_spec,
     console_for,
     report_errors,
 )
@@ -53,17 +52,14 @@ def allan(
     which compare the classic read-offs (N at 1 s, B = minimum/0.664, K at
     3 s) and exit 3 naming the series and the figure.
     """
-    from gyrocomp import allan as al
+    from gyrocomp.commands import allan as stage, from_params
 
     console = console_for(ctx, out)
     with report_errors(ctx):
-        settings = al.get_config(config)
-        spec = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
-        series = al.write_report(recordings, out, column=column, taus=taus, settings=settings, columns=spec, resample=resample)
-        if plot is not None:
-            al.plot_allan(series, plot)
+        options = from_params(stage.Options, ctx.params)
+        series = stage.to_files(recordings, out, options)
         console.print(_table(series))
-        al.check_thresholds(series, max_arw=max_arw, max_bias_instability=max_bias_instability, max_rrw=max_rrw)
+        stage.check(series, options)
 
 
 def _table(series):

@@ -9,10 +9,6 @@ import typer
 
 from gyrocomp.cli._app import app, console_for, progress, report_errors
 
-_BATCH_OWNS = {"out", "workers", "config", "plot", "recordings", "recording", "model", "train_rec"}
-"""Parameters of the commands that a batch sets itself (or takes as its own options)."""
-
-
 @app.command(context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
 def batch(
     ctx: typer.Context,
@@ -102,7 +98,7 @@ def _command_options(command: str, tokens: list[str]) -> dict:
     target = typer.main.get_command(root).commands[command]
     # The command itself, reduced to the options a batch passes through (Typer bundles its own click).
     parser = copy.copy(target)
-    parser.params = [p for p in target.params if p.param_type_name == "option" and p.name in job.options and p.name not in _BATCH_OWNS]
+    parser.params = [p for p in target.params if p.param_type_name == "option" and p.name in job.options]
     parser.add_help_option = False
     try:
         ctx = parser.make_context(f"gyrocomp batch {command}", list(tokens))

@@ -23,7 +23,7 @@ def classify(
         Optional[str],
         typer.Option("--config", help="Pipeline TOML (path or name in configs/); its [classify] table is read. Default: the PE-LCD-ANFIS settings."),
     ] = None,
-    assignments: Annotated[
+    overrides: Annotated[
         Optional[List[str]],
         typer.Option("--set", help="Override a setting, e.g. --set classify.sample.m=3 (repeatable)."),
     ] = None,
@@ -37,18 +37,11 @@ def classify(
     settings and thresholds used.
     """
     with report_errors(ctx):
-        from gyrocomp import config as cfg
-        from gyrocomp.classify import ClassifySettings, write_classes
+        from gyrocomp.commands import classify as stage, from_params
 
-        table, source = {}, "defaults [classify]"
-        if config is not None or assignments:
-            whole = cfg.load_config(config) if config is not None else {}
-            whole = cfg.apply_overrides(whole, assignments or ())
-            table, source = dict(whole.get("classify", {})), f"{config or '--set'} [classify]"
-        settings = cfg.bind(ClassifySettings, table, source)
-        if entropy is not None:
-            settings = cfg.bind(ClassifySettings, {**table, "entropy": entropy}, f"--entropy {entropy}")
-        entries = write_classes(components, settings, out, plot=plot)
+        options = from_params(stage.Options, ctx.params)
+        settings = options.settings()
+        entries = stage.to_files([components], out, options)
     _print_table(console_for(ctx, out), entries, settings)
 
 

@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from gyrocomp.cli._app import RateCol, RateUnit, Resample, TempCol, TempUnit, TimeCol, TimeUnit, app, column_spec, console_for, progress, report_errors
+from gyrocomp.cli._app import RateCol, RateUnit, Resample, TempCol, TempUnit, TimeCol, TimeUnit, app, console_for, progress, report_errors
 
 
 @app.command()
@@ -36,13 +36,11 @@ def compensate(
     model.json is refused with exit code 2.
     """
     with report_errors(ctx):
-        from gyrocomp.pipeline.run import compensate_to_files
+        from gyrocomp.commands import compensate as stage, from_params
 
-        spec = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
+        options = from_params(stage.Options, ctx.params)
         with progress(ctx, f"compensate ({mode})", out) as update:
-            frame, summary, _, caught = compensate_to_files(
-                recording, model, out, mode=mode, seed=seed, workers=workers, columns=spec, resample=resample, callback=update
-            )
+            frame, summary, _, caught = stage.to_files([recording, model], out, options, progress=update)
         for warning in caught:
             print(f"gyrocomp: warning: {warning.message}", file=sys.stderr)
     console = console_for(ctx, out)

@@ -16,7 +16,6 @@ from gyrocomp.cli._app import (
     TimeCol,
     TimeUnit,
     app,
-    column_spec,
     console_for,
     progress,
     report_errors,
@@ -33,7 +32,7 @@ def decompose(
     seed: Annotated[int, typer.Option("--seed", help="Seed of the noise ensemble.")] = 0,
     workers: Annotated[int, typer.Option("--workers", help="Processes for the ensemble; the result does not depend on it.")] = 1,
     config: Annotated[Optional[str], typer.Option("--config", help="Pipeline TOML (path or name in configs/); its [decompose] table is read.")] = None,
-    set_: Annotated[Optional[List[str]], typer.Option("--set", help="Override a setting of [decompose], e.g. --set sd_stop=0.2 (repeatable).")] = None,
+    overrides: Annotated[Optional[List[str]], typer.Option("--set", help="Override a setting of [decompose], e.g. --set sd_stop=0.2 (repeatable).")] = None,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
@@ -49,25 +48,11 @@ def decompose(
     mean frequency, orthogonality index; and the reconstruction error).
     """
     with report_errors(ctx):
-        from gyrocomp import config as cfg
-        from gyrocomp.decompose import DecomposeSettings, write_components
+        from gyrocomp.commands import decompose as stage, from_params
 
-        table = {}
-        source = "[decompose]"
-        if config is not None:
-            table = dict(cfg.load_config(config).get("decompose", {}))
-            source = f"{config} [decompose]"
-        table = cfg.apply_overrides({"decompose": table}, [f"decompose.{a}" for a in set_ or []])["decompose"]
-        if method is not None:
-            table["method"] = method
-        if ensemble is not None:
-            table["ensemble"] = ensemble
-        settings = cfg.bind(DecomposeSettings, table, source)
-        columns = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
-        with progress(ctx, f"{settings.method} {recording.name}") as callback:
-            _, sidecar = write_components(
-                recording, settings, out, seed=seed, workers=workers, callback=callback, columns=columns, resample=resample
-            )
+        options = from_params(stage.Options, ctx.params)
+        with progress(ctx, f"{options.settings().method} {recording.name}") as callback:
+            _, sidecar = stage.to_files([recording], out, options, progress=callback)
     _print_table(console_for(ctx), sidecar)
 
 

@@ -16,7 +16,6 @@ from gyrocomp.cli._app import (
     TimeCol,
     TimeUnit,
     app,
-    column_spec,
     console_for,
     progress,
     report_errors,
@@ -50,15 +49,10 @@ def diagnose(
     name the unmodelled effects that explain the rest, and show where the gap lies and how
     far it shrinks on the held-out run."""
     with report_errors(ctx):
-        from gyrocomp.diagnose import get_config
-        from gyrocomp.diagnose.report import plot_gap, summary_table, write_report
+        from gyrocomp.commands import diagnose as stage, from_params
+        from gyrocomp.diagnose.report import summary_table
 
-        columns = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
-        settings = get_config(config)
+        options = from_params(stage.Options, ctx.params)
         with progress(ctx, "diagnose: fitting candidates", out) as update:
-            report = write_report(
-                fit, out, holdout=holdout, settings=settings, sim=sim, columns=columns, resample=resample, markdown=markdown, callback=update
-            )
-        if plot is not None:
-            plot_gap(report, plot)
+            report = stage.to_files([fit], out, options, progress=update)
         console_for(ctx, out).print(summary_table(report))

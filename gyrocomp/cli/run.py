@@ -7,7 +7,7 @@ from typing import Annotated, List, Optional
 
 import typer
 
-from gyrocomp.cli._app import RateCol, RateUnit, TempCol, TempUnit, TimeCol, TimeUnit, app, column_spec, console_for, report_errors, state
+from gyrocomp.cli._app import RateCol, RateUnit, TempCol, TempUnit, TimeCol, TimeUnit, app, console_for, report_errors, state
 
 
 @app.command()
@@ -19,7 +19,7 @@ def run(
     out: Annotated[Path, typer.Option("--out", "-o", help="Folder for every artefact and report.md, report.png, report.json.")] = ...,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random step.")] = 0,
     workers: Annotated[int, typer.Option("--workers", help="Processes for the decompositions.")] = 1,
-    assignments: Annotated[Optional[List[str]], typer.Option("--set", help="Override a run-config value, e.g. --set 'run.methods=[\"polynomial\"]' (repeatable).")] = None,
+    overrides: Annotated[Optional[List[str]], typer.Option("--set", help="Override a run-config value, e.g. --set 'run.methods=[\"polynomial\"]' (repeatable).")] = None,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
@@ -38,7 +38,7 @@ def run(
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
         from rich.console import Console
 
-        from gyrocomp.pipeline.run import run as run_all
+        from gyrocomp.commands import from_params, run as stage
 
         bar = Progress(
             TextColumn("{task.description:<48}"),
@@ -54,17 +54,7 @@ def run(
             def update(stage: str, done: int, total: int) -> None:
                 bar.update(task, description=stage, completed=done, total=total or None)
 
-            report = run_all(
-                config,
-                train_rec,
-                out,
-                test_path=test,
-                seed=seed,
-                workers=workers,
-                overrides=assignments or (),
-                columns=column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit),
-                progress=update,
-            )
+            report = stage.to_files([config, train_rec], out, from_params(stage.Options, ctx.params), progress=update)
     _print(console_for(ctx), report, out)
 
 

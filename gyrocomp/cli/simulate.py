@@ -9,9 +9,6 @@ import typer
 
 from gyrocomp.cli._app import TempCol, app, console_for, progress, report_errors
 
-_RECORDING_SUFFIXES = (".csv", ".parquet", ".pq")
-
-
 @app.command()
 def simulate(
     ctx: typer.Context,
@@ -26,7 +23,7 @@ def simulate(
     ] = None,
     seed: Annotated[Optional[int], typer.Option("--seed", help="Seed of every random draw (beats run.seed).")] = None,
     fs: Annotated[Optional[float], typer.Option("--fs", help="Sample rate in Hz (beats run.fs_hz).")] = None,
-    assignments: Annotated[
+    overrides: Annotated[
         Optional[List[str]],
         typer.Option("--set", help="Override a setting, e.g. --set gyro.thermal_lag.tau_s=600 (repeatable)."),
     ] = None,
@@ -44,26 +41,10 @@ def simulate(
     rate_random_walk. The same config and seed give the same bytes.
     """
     with report_errors(ctx):
-        from gyrocomp import io, sim
-        from gyrocomp.cli._app import column_spec
+        from gyrocomp.commands import from_params, simulate as stage
 
-        recording = None
-        profile_config = profile
-        if profile is not None and Path(profile).suffix.lower() in _RECORDING_SUFFIXES:
-            spec = column_spec("time", "rate", temp_col, "s", "deg/s", "degC")
-            recording = io.read_recording(profile, spec, require_temperature=True, resample=True)
-            profile_config = None
-        cfg = sim.load_sim_config(
-            config,
-            profile=profile_config,
-            overrides=assignments or (),
-            seed=seed,
-            fs_hz=fs,
-            truth_columns=truth_columns,
-        )
         with progress(ctx, "simulating", out) as update:
-            frame, header = sim.run(cfg, temperature_from=recording, progress=update)
-            io.write_table(out, frame, header)
+            frame, header, cfg = stage.to_files([] if config is None else [config], out, from_params(stage.Options, ctx.params), progress=update)
     console = console_for(ctx, out)
     truth = header["truth"]
     effects = ", ".join(truth["active_effects"]) or "none (baseline only)"

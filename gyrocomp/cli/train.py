@@ -7,7 +7,7 @@ from typing import Annotated, List, Optional
 
 import typer
 
-from gyrocomp.cli._app import RateCol, RateUnit, TempCol, TempUnit, TimeCol, TimeUnit, app, column_spec, console_for, report_errors
+from gyrocomp.cli._app import RateCol, RateUnit, TempCol, TempUnit, TimeCol, TimeUnit, app, console_for, report_errors
 
 
 @app.command()
@@ -24,7 +24,7 @@ def train(
     config: Annotated[str, typer.Option("--config", "-c", help="Pipeline TOML or a name in configs/ (pe-lcd-anfis, iceemdan-se-tfpf-nsga2elm, bp, elm, polynomial).")] = "pe-lcd-anfis",
     out: Annotated[Path, typer.Option("--out", "-o", help="model.json to write.")] = ...,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every learner that draws random numbers.")] = 0,
-    assignments: Annotated[Optional[List[str]], typer.Option("--set", help="Override a config value, e.g. --set model.drift.epochs=20 (repeatable).")] = None,
+    overrides: Annotated[Optional[List[str]], typer.Option("--set", help="Override a config value, e.g. --set model.drift.epochs=20 (repeatable).")] = None,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
@@ -42,28 +42,10 @@ def train(
     window_s. model.json holds every setting and learned number compensate needs.
     """
     with report_errors(ctx):
-        from gyrocomp import io
-        from gyrocomp.config import apply_overrides, load_config
-        from gyrocomp.errors import InputError
-        from gyrocomp.pipeline.settings import pipeline_settings
-        from gyrocomp.pipeline.train import file_record, train_direct, train_parallel
+        from gyrocomp.commands import from_params, train as stage
 
-        cfg = apply_overrides(load_config(config), assignments or ())
-        pipeline = pipeline_settings(cfg, config)
-        if pipeline.parallel:
-            if classes is None:
-                raise InputError(f"{config}: a parallel pipeline needs CLASSES (classes.json from `gyrocomp classify`)")
-            frame, header = io.read_table(components, "gyrocomp.components")
-            labels = io.read_json(classes, "gyrocomp.classes")
-            inputs = [file_record(components), file_record(classes)]
-            model = train_parallel(frame, header, labels, cfg, source=config, seed=seed, inputs=inputs)
-        else:
-            if classes is not None:
-                raise InputError(f"{config}: a direct pipeline ({pipeline.kind}) trains on the recording alone; drop {classes}")
-            spec = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
-            recording = io.read_recording(components, spec, require_temperature=True, min_samples=16)
-            model = train_direct(recording, cfg, source=config, seed=seed)
-        io.write_json(out, model)
+        inputs = [components] if classes is None else [components, classes]
+        model = stage.to_files(inputs, out, from_params(stage.Options, ctx.params))
     console = console_for(ctx, out)
     t = model["training"]
     fits = ", ".join(f"{seg}: {entry['learner']['kind']} rmse {entry['train_rmse_dps']:.3g} deg/s" for seg, entry in model["segments"].items())

@@ -2,8 +2,8 @@
 
 The algorithms live in the modules :mod:`.lcd`, :mod:`.iceemdan`,
 :mod:`.ceemdan` and :mod:`.emd` (functions of the same names);
-:func:`write_components` is the ``components.parquet`` artefact that
-``gyrocomp decompose`` and the pipelines write.
+:func:`gyrocomp.commands.decompose.write` is the ``components.parquet``
+artefact that ``gyrocomp decompose`` and the pipelines write.
 
 Methods: ``lcd`` (Cao et al. 2021 eqs. (4)-(11)), ``iceemdan`` (Colominas
 et al. 2014), ``ceemdan`` (Torres et al. 2011) and plain ``emd`` (Huang et
@@ -14,8 +14,6 @@ table of a pipeline config (:class:`DecomposeSettings`).
 from __future__ import annotations
 
 import dataclasses
-import os
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -30,7 +28,6 @@ __all__ = [
     "DecomposeSettings",
     "Decomposition",
     "decompose",
-    "write_components",
     "component_stats",
     "SIDECAR_SCHEMA",
 ]
@@ -195,72 +192,6 @@ def decompose(
         prefix, last = "imf", "residue"
     names = [f"{prefix}{k + 1}" for k in range(comps.shape[0] - 1)] + [last]
     return Decomposition(components=comps, names=names, method=s.method, signal=x)
-
-
-def write_components(
-    recording,
-    settings: DecomposeSettings,
-    out: str | os.PathLike,
-    *,
-    seed: int = 0,
-    workers: int = 1,
-    callback: Callable[[int, int], None] | None = None,
-    columns=None,
-    resample: bool = False,
-) -> tuple[Decomposition, dict]:
-    """Decompose a recording's rate and write ``components.parquet`` with its ``components.json`` sidecar.
-
-    The sequence ``gyrocomp decompose`` and the parallel pipelines
-    (:func:`gyrocomp.pipeline.run.decompose_and_classify`) share.
-
-    Parameters
-    ----------
-    recording : gyrocomp.io.Recording or path-like
-        A recording, or a CSV / Parquet file read with `columns` and
-        `resample` (at least 4 samples).
-    settings : DecomposeSettings
-    out : path-like
-        ``components.parquet`` to write: ``time``, ``rate``,
-        ``temperature`` (when the recording has it) and one column per
-        component, fastest first; header schema ``gyrocomp.components``
-        with ``components`` (the names) and ``fs_hz``. The sidecar
-        (schema :data:`SIDECAR_SCHEMA`, :func:`component_stats`) goes
-        beside it with suffix ``.json``.
-    seed, workers, callback
-        As :func:`decompose`.
-    columns : gyrocomp.io.ColumnSpec or None
-        Column names and units when `recording` is a path (``None``: the defaults).
-    resample : bool, default=False
-        Interpolate a jittered time axis instead of refusing it (path only).
-
-    Returns
-    -------
-    decomposition : Decomposition
-    sidecar : dict
-        The ``components.json`` object written.
-    """
-    import pandas as pd
-
-    from gyrocomp import io
-    from gyrocomp.config import settings_dict
-
-    if not isinstance(recording, io.Recording):
-        recording = io.read_recording(recording, columns or io.ColumnSpec(), min_samples=4, resample=resample)
-    result = decompose(recording.rate_dps, settings, seed=seed, workers=workers, callback=callback)
-    frame = pd.DataFrame({"time": recording.time_s, "rate": recording.rate_dps})
-    if recording.temperature_c is not None:
-        frame["temperature"] = recording.temperature_c
-    for name, values in zip(result.names, result.components):
-        frame[name] = values
-    resolved = settings_dict(settings)
-    inputs = [recording.input_record()]
-    header = io.artefact_header("gyrocomp.components", inputs=inputs, settings=resolved, seed=seed)
-    header.update(components=list(result.names), fs_hz=recording.fs_hz)
-    sidecar = io.artefact_header(SIDECAR_SCHEMA, inputs=inputs, settings=resolved, seed=seed)
-    sidecar.update(method=settings.method, fs_hz=recording.fs_hz, **component_stats(result, recording.fs_hz))
-    io.write_table(out, frame, header)
-    io.write_json(Path(out).with_suffix(".json"), sidecar)
-    return result, sidecar
 
 
 def _check_signal(x) -> np.ndarray:

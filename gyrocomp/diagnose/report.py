@@ -8,73 +8,7 @@ import numpy as np
 
 from gyrocomp.io import artefact_header, atomic_path
 
-__all__ = ["write_report", "to_json", "to_markdown", "summary_table", "plot_gap"]
-
-
-def write_report(
-    fit: str | os.PathLike,
-    out: str | os.PathLike,
-    *,
-    holdout: str | os.PathLike | None = None,
-    settings=None,
-    sim: str | os.PathLike | None = None,
-    columns=None,
-    resample: bool = False,
-    markdown: str | os.PathLike | None = None,
-    callback=None,
-) -> dict:
-    """Read the recordings, diagnose them and write ``report.json`` (and ``report.md``).
-
-    The sequence ``gyrocomp diagnose`` and ``gyrocomp batch diagnose``
-    share; the plot (:func:`plot_gap`) is left to the caller.
-
-    Parameters
-    ----------
-    fit, holdout : path-like
-        Recordings (CSV or Parquet) to calibrate on and to check on.
-    out : path-like
-        ``report.json`` to write (``-`` is stdout).
-    settings : DiagnoseSettings or None
-        ``None`` takes the shipped ``configs/diagnose.toml``.
-    sim : path-like or None
-        A simulator config whose enabled effects join the baseline.
-    columns : gyrocomp.io.ColumnSpec or None
-        Column names and units of the recordings (``None``: the defaults).
-    resample : bool, default=False
-        Interpolate a jittered time axis instead of refusing it.
-    markdown : path-like or None
-        ``report.md`` to write.
-    callback : callable(done, total) or None
-        Progress of the candidate fits.
-
-    Returns
-    -------
-    dict
-        The report as written.
-    """
-    from pathlib import Path
-
-    from gyrocomp import io
-    from gyrocomp.config import settings_dict
-    from gyrocomp.diagnose import diagnose, get_config
-
-    settings = settings if settings is not None else get_config()
-    columns = columns or io.ColumnSpec()
-    fit_rec = io.read_recording(fit, columns, resample=resample, min_samples=64)
-    hold_rec = io.read_recording(holdout, columns, resample=resample, min_samples=64) if holdout else None
-    start = ()
-    if sim is not None:
-        from gyrocomp.sim.model import load_sim_config
-
-        start = tuple(load_sim_config(sim).gyro.active_effects())
-    body = diagnose(fit_rec, hold_rec, settings, start_effects=start, callback=callback)
-    inputs = [fit_rec.input_record()] + ([hold_rec.input_record()] if hold_rec else [])
-    report = to_json(body, inputs=inputs, settings=settings_dict(settings))
-    io.write_json(out, report)
-    if markdown is not None:
-        with atomic_path(markdown) as tmp:
-            Path(tmp).write_text(to_markdown(report), encoding="utf-8")
-    return report
+__all__ = ["to_json", "to_markdown", "summary_table", "plot_gap"]
 
 
 def to_json(body: dict, *, inputs: list, settings: dict) -> dict:

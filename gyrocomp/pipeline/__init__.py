@@ -1,4 +1,7 @@
-"""Pipelines end to end: train a drift model, compensate a recording, compare methods.
+"""Pipelines: train a drift model, compensate a recording, score the result.
+
+The file-level stages (``gyrocomp train``, ``compensate``, ``run``) are in
+:mod:`gyrocomp.commands`.
 
 Public API
 ----------
@@ -6,10 +9,6 @@ Public API
     Fit a config's learners; return the ``model.json`` object.
 :func:`load_model`, :func:`compensate`
     Apply a model in ``full`` or ``causal`` mode.
-:func:`compensate_to_files`
-    Read a recording and a model, compensate, write the artefacts (the CLI's sequence).
-:func:`run`
-    The whole chain for several methods, scored on a held-out run, with the report.
 :mod:`gyrocomp.pipeline.rate`
     The temperature-rate estimator (centred and causal Savitzky-Golay slope).
 :mod:`gyrocomp.pipeline.evaluate`
@@ -17,7 +16,6 @@ Public API
 """
 
 from gyrocomp.pipeline.compensate import ExtrapolationWarning, compensate, load_model
-from gyrocomp.pipeline.run import compensate_to_files, run
 from gyrocomp.pipeline.train import train_direct, train_parallel
 
-__all__ = ["train_direct", "train_parallel", "load_model", "compensate", "ExtrapolationWarning", "run", "compensate_to_files"]
+__all__ = ["train_direct", "train_parallel", "load_model", "compensate", "ExtrapolationWarning"]

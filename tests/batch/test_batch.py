@@ -76,7 +76,7 @@ def test_rerun_skips_up_to_date_and_redoes_changed_settings(logs, tmp_path):
     assert first["arw_fit"].notna().all()  # a skipped row keeps its figures
     changed = run_batch("allan", [str(logs / "unit*.parquet")], out, workers=1, options={"taus": "decade"})
     assert changed.count("ok") == N_GOOD
-    assert read_manifest(out / "unit0")["settings"]["allan"]["taus"] == "decade"
+    assert read_manifest(out / "unit0")["settings"]["options"]["taus"] == "decade"
 
 
 def test_threshold_crossed_exits_3_and_is_remembered(logs, tmp_path):
@@ -146,7 +146,7 @@ def test_compensate_needs_a_model_and_applies_it(logs, tmp_path):
     assert result.exit_code == 0, result.output
     summary = pd.read_csv(out / "summary.csv")
     assert summary["compensated_drift_std_deg_h"].notna().all()
-    assert read_manifest(out / "unit0")["settings"]["mode"] == "causal"
+    assert read_manifest(out / "unit0")["settings"]["options"]["mode"] == "causal"
     assert sorted(p.name for p in (out / "unit0").iterdir()) == ["compensated.json", "compensated.parquet", MANIFEST]
 
 
@@ -177,19 +177,26 @@ def test_expand_inputs_and_pairing(tmp_path):
     assert paired_path(None, Path("u.csv")) is None
 
 
-def test_job_defaults_equal_the_commands_defaults():
-    """A library caller gets what the CLI command would use."""
+def test_batch_passes_the_commands_options_with_their_defaults():
+    """A batch passes options the command has, and the stage's defaults are the command's."""
+    import dataclasses
     import importlib
 
     import typer.main
 
-    for name, job in JOBS.items():
+    from gyrocomp.commands import STAGES, from_params, stage
+
+    for name in STAGES:
         importlib.import_module(f"gyrocomp.cli.{name}")
         command = typer.main.get_command(app).commands[name]
-        defaults = {p.name: p.default for p in command.params}
-        for option, default in job.options.items():
-            assert option in defaults, (name, option)
-            assert defaults[option] == default or (defaults[option] in ((), None) and default is None), (name, option)
+        defaults = {p.name: p.default for p in command.params if p.default is not ...}
+        options = stage(name).Options
+        assert from_params(options, defaults) == options(), name
+        given = {f.name for f in dataclasses.fields(options)} - {"columns"}
+        assert given <= set(defaults), (name, given - set(defaults))
+    for name, job in JOBS.items():
+        command = typer.main.get_command(app).commands[name]
+        assert set(job.options) <= {p.name for p in command.params}, name
 
 
 @pytest.mark.slow
@@ -222,7 +229,7 @@ def test_diagnose_batch_writes_report_and_gap_figures(logs, tmp_path):
 
 
 def test_batch_allan_writes_what_the_allan_command_writes(logs, tmp_path):
-    """Both call gyrocomp.allan.write_report: same allan.json bytes."""
+    """Both call gyrocomp.commands.allan.to_files: same allan.json bytes."""
     single = tmp_path / "single.json"
     assert CliRunner().invoke(app, ["-q", "allan", str(logs / "unit2.parquet"), "--out", str(single)]).exit_code == 0
     run_batch("allan", [str(logs / "unit2.parquet")], tmp_path / "b", workers=1)

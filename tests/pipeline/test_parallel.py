@@ -128,7 +128,7 @@ def test_compensate_cli_warns_out_of_range_on_stderr(make_recording, tmp_path, o
 def test_pipeline_writes_the_cli_artefacts_byte_for_byte(tmp_path, oven_files):
     """`run`'s decompose and classify stage and the two commands share one writer per artefact."""
     from gyrocomp.config import load_config
-    from gyrocomp.pipeline.run import decompose_and_classify
+    from gyrocomp.commands.run import decompose_and_classify
 
     train_path, _ = oven_files
     cli, pipe = tmp_path / "cli", tmp_path / "pipe"

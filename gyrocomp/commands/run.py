@@ -18,11 +18,12 @@ scored and the report says that nothing was held out.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 import warnings
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Optional, Sequence
 
 import numpy as np
 
@@ -30,11 +31,11 @@ from gyrocomp import io
 from gyrocomp.config import apply_overrides, bind, load_config, settings_dict
 from gyrocomp.errors import InputError
 from gyrocomp.pipeline import evaluate
-from gyrocomp.pipeline.compensate import COMPENSATION_SCHEMA, compensate, load_model
+from gyrocomp.pipeline.compensate import compensate, load_model
 from gyrocomp.pipeline.settings import EvaluateSettings, RunSettings, SignalSettings, pipeline_settings
 from gyrocomp.pipeline.train import file_record, train_direct, train_parallel
 
-__all__ = ["REPORT_SCHEMA", "load_run_config", "run", "decompose_and_classify", "write_compensation", "compensate_to_files"]
+__all__ = ["REPORT_SCHEMA", "Options", "to_files", "load_run_config", "decompose_and_classify"]
 
 REPORT_SCHEMA = "gyrocomp.report"
 
@@ -57,36 +58,43 @@ def load_run_config(path: str | os.PathLike, overrides=()) -> tuple[RunSettings,
     )
 
 
-def run(
-    config_path: str | os.PathLike,
-    train_path: str | os.PathLike,
-    out_dir: str | os.PathLike,
-    *,
-    test_path: str | os.PathLike | None = None,
-    seed: int = 0,
-    workers: int = 1,
-    overrides=(),
-    columns: io.ColumnSpec = io.ColumnSpec(),
-    progress: Progress | None = None,
-) -> dict:
-    """Train, compensate and score every method of a run config.
+@dataclasses.dataclass(frozen=True)
+class Options:
+    """Settings of ``gyrocomp run`` (defaults: the command's).
 
-    Parameters
+    Attributes
     ----------
-    config_path : path-like
-        The run config (``configs/compare.toml``).
-    train_path, test_path : path-like
-        Recordings with temperature; the test run is held out from training.
-    out_dir : path-like
-        Folder for every artefact and the report.
+    test : path-like or None
+        Held-out recording to score on; ``None`` scores the training run (and the report says so).
     seed : int
         Seed of every random step (decompositions, learners).
     workers : int
         Processes for the decompositions.
-    overrides : sequence of str
-        ``table.key=value`` assignments to the run config.
+    overrides : tuple of str
+        ``table.key=value`` assignments to the run config (``--set``).
     columns : gyrocomp.io.ColumnSpec
         Column names and units of the recordings.
+    """
+
+    test: Optional[str | os.PathLike] = None
+    seed: int = 0
+    workers: int = 1
+    overrides: tuple = ()
+    columns: io.ColumnSpec = io.ColumnSpec()
+
+
+def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, options: Options = Options(), *, progress: Progress | None = None) -> dict:
+    """Train, compensate and score every method of a run config.
+
+    Parameters
+    ----------
+    inputs : sequence of path-like
+        ``[run config, training recording]``: the run config
+        (``configs/compare.toml``, or a name in ``configs/``) and a
+        recording with temperature; ``options.test`` is held out from training.
+    out_dir : path-like
+        Folder for every artefact and the report.
+    options : Options
     progress : callable(stage, done, total) or None
 
     Returns
@@ -94,15 +102,19 @@ def run(
     dict
         The report (also written as ``report.json``).
     """
+    from gyrocomp.commands import PLOT_LOCK
+    from gyrocomp.commands.compensate import write as write_compensation
     from gyrocomp.pipeline import report
 
     started = time.perf_counter()
     step = progress or (lambda stage, done, total: None)
-    run_settings, eval_settings, signal_settings, _ = load_run_config(config_path, overrides)
+    config_path, train_path = inputs
+    seed, workers, columns = options.seed, options.workers, options.columns
+    run_settings, eval_settings, signal_settings, _ = load_run_config(config_path, options.overrides)
     out = Path(out_dir)
     train_rec = io.read_recording(train_path, columns, require_temperature=True, min_samples=16)
-    held_out = test_path is not None
-    test_rec = io.read_recording(test_path, columns, require_temperature=True, min_samples=16) if held_out else train_rec
+    held_out = options.test is not None
+    test_rec = io.read_recording(options.test, columns, require_temperature=True, min_samples=16) if held_out else train_rec
     signal, parts = evaluate.injected_signal(test_rec.time_s, test_rec.fs_hz, signal_settings)
     signal_rec = _with_signal(test_rec, signal)
 
@@ -158,7 +170,8 @@ def run(
     result["findings"] = report.findings(result)
     result["total_time_s"] = time.perf_counter() - started
     step("report", 0, 1)
-    report.write(out, result)
+    with PLOT_LOCK:
+        report.write(out, result)
     return result
 
 
@@ -166,8 +179,8 @@ def decompose_and_classify(recording: io.Recording, config: dict, source: str, f
     """Decompose a recording and classify its components as ``gyrocomp decompose`` and ``classify`` do.
 
     Writes ``components.parquet`` (+ the ``components.json`` sidecar,
-    :func:`gyrocomp.decompose.write_components`) and ``classes.json``
-    (:func:`gyrocomp.classify.write_classes`) into `folder`.
+    :func:`gyrocomp.commands.decompose.write`) and ``classes.json``
+    (:func:`gyrocomp.commands.classify.write`) into `folder`.
 
     Returns
     -------
@@ -176,83 +189,19 @@ def decompose_and_classify(recording: io.Recording, config: dict, source: str, f
     paths : dict
         ``components`` and ``classes``.
     """
-    from gyrocomp.classify import ClassifySettings, write_classes
-    from gyrocomp.decompose import DecomposeSettings, write_components
+    from gyrocomp.classify import ClassifySettings
+    from gyrocomp.commands import classify, decompose
+    from gyrocomp.decompose import DecomposeSettings
 
     settings = bind(DecomposeSettings, config.get("decompose"), f"{source} [decompose]")
     classify_settings = bind(ClassifySettings, config.get("classify"), f"{source} [classify]")
     paths = {"components": folder / "components.parquet", "classes": folder / "classes.json"}
     t0 = time.perf_counter()
-    write_components(recording, settings, paths["components"], seed=seed, workers=workers, callback=callback)
+    decompose.write(recording, settings, paths["components"], seed=seed, workers=workers, progress=callback)
     t1 = time.perf_counter()
-    write_classes(paths["components"], classify_settings, paths["classes"])
+    classify.write(paths["components"], classify_settings, paths["classes"])
     times = {"decompose": t1 - t0, "classify": time.perf_counter() - t1}
     return times, paths
-
-
-def write_compensation(path: Path, frame, summary: dict, recording: io.Recording, model_path: Path, mode: str, seed) -> dict:
-    """Write ``compensated.parquet`` and its ``compensation.json`` sidecar (same stem).
-
-    The sidecar holds the header (inputs: the recording and the model file),
-    the summary of :func:`~gyrocomp.pipeline.compensate.compensate`, and the
-    RMS of the drift model and of the compensated rate.
-    """
-    header = io.artefact_header(
-        COMPENSATION_SCHEMA,
-        inputs=[recording.input_record(), file_record(model_path)],
-        settings={"mode": mode},
-        seed=seed,
-    )
-    io.write_table(path, frame, header)
-    figures = {
-        "n_samples": int(len(frame)),
-        "fs_hz": float(recording.fs_hz),
-        "drift_model_rms_dps": float(np.sqrt(np.mean(frame["drift_model"].to_numpy() ** 2))),
-        "rate_std_dps": float(np.std(frame["rate"].to_numpy())),
-        "compensated_std_dps": float(np.std(frame["compensated"].to_numpy())),
-    }
-    sidecar = {**header, **summary, "figures": figures}
-    io.write_json(path.with_suffix(".json"), sidecar)
-    return sidecar
-
-
-def compensate_to_files(
-    recording_path: str | os.PathLike,
-    model_path: str | os.PathLike,
-    out: str | os.PathLike,
-    *,
-    mode: str = "causal",
-    seed: int | None = None,
-    workers: int = 1,
-    columns: io.ColumnSpec = io.ColumnSpec(),
-    resample: bool = False,
-    callback=None,
-) -> tuple:
-    """Read a model and a recording, compensate, write the artefacts: ``gyrocomp compensate`` as a function.
-
-    The sequence ``gyrocomp compensate`` and ``gyrocomp batch compensate``
-    share. `out` ``-`` writes the table as CSV to stdout, without sidecar.
-
-    Returns
-    -------
-    frame : pandas.DataFrame
-        ``time``, ``rate``, ``temperature``, ``drift_model``, ``compensated``.
-    summary : dict
-        From :func:`~gyrocomp.pipeline.compensate.compensate`.
-    recording : gyrocomp.io.Recording
-    caught : list of warnings.WarningMessage
-        The warnings compensating raised (e.g. leaving the training temperature range).
-    """
-    drift = load_model(io.read_json(model_path, "gyrocomp.model"), str(model_path))
-    recording = io.read_recording(recording_path, columns, require_temperature=True, min_samples=2, resample=resample)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        frame, summary = compensate(recording, drift, mode, seed=seed, workers=workers, callback=callback)
-    if str(out) == "-":
-        io.write_table(out, frame, {})
-    else:
-        write_compensation(Path(out), frame, summary, recording, Path(model_path), mode, seed)
-    return frame, summary, recording, list(caught)
 
 
 def _train_method(config, source, name, train_rec, folder: Path, seed, workers, step):

@@ -1,0 +1,126 @@
+"""``decompose``: a recording to ``components.parquet`` and its ``components.json`` sidecar."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+from typing import Callable, Optional, Sequence
+
+from gyrocomp.io import ColumnSpec
+
+__all__ = ["Options", "to_files", "write"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Options:
+    """Settings of ``gyrocomp decompose`` (defaults: the command's).
+
+    Attributes
+    ----------
+    method : str or None
+        ``lcd``, ``iceemdan``, ``ceemdan`` or ``emd``; ``None`` takes the config's, else ``lcd``.
+    ensemble : int or None
+        Noise realisations of iceemdan / ceemdan; ``None`` takes the config's.
+    seed : int
+        Seed of the noise ensemble.
+    workers : int
+        Processes for the ensemble; the result does not depend on it.
+    config : str or None
+        Pipeline TOML (path or name in ``configs/``) whose ``[decompose]`` table is read.
+    overrides : tuple of str
+        ``key=value`` assignments to the ``[decompose]`` table (``--set``).
+    columns : gyrocomp.io.ColumnSpec
+    resample : bool
+        Interpolate a jittered time axis instead of refusing it.
+    """
+
+    method: Optional[str] = None
+    ensemble: Optional[int] = None
+    seed: int = 0
+    workers: int = 1
+    config: Optional[str] = None
+    overrides: tuple = ()
+    columns: ColumnSpec = ColumnSpec()
+    resample: bool = False
+
+    def settings(self):
+        """The :class:`~gyrocomp.decompose.DecomposeSettings`: the config's table, then ``--set``, then method and ensemble."""
+        from gyrocomp import config as cfg
+        from gyrocomp.decompose import DecomposeSettings
+
+        table, source = {}, "[decompose]"
+        if self.config is not None:
+            table = dict(cfg.load_config(self.config).get("decompose", {}))
+            source = f"{self.config} [decompose]"
+        table = cfg.apply_overrides({"decompose": table}, [f"decompose.{a}" for a in self.overrides])["decompose"]
+        if self.method is not None:
+            table["method"] = self.method
+        if self.ensemble is not None:
+            table["ensemble"] = self.ensemble
+        return cfg.bind(DecomposeSettings, table, source)
+
+
+def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options(), *, progress: Callable[[int, int], None] | None = None):
+    """Read a recording (``inputs = [recording]``), decompose its rate and write the artefacts (:func:`write`).
+
+    Returns
+    -------
+    decomposition : gyrocomp.decompose.Decomposition
+    sidecar : dict
+        The ``components.json`` object written.
+    """
+    from gyrocomp import io
+
+    (path,) = inputs
+    recording = io.read_recording(path, options.columns, min_samples=4, resample=options.resample)
+    return write(recording, options.settings(), out, seed=options.seed, workers=options.workers, progress=progress)
+
+
+def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers: int = 1, progress: Callable[[int, int], None] | None = None):
+    """Decompose a recording's rate and write ``components.parquet`` with its ``components.json`` sidecar.
+
+    The sequence ``gyrocomp decompose`` and the parallel pipelines
+    (:func:`gyrocomp.commands.run.decompose_and_classify`) share.
+
+    Parameters
+    ----------
+    recording : gyrocomp.io.Recording
+    settings : gyrocomp.decompose.DecomposeSettings
+    out : path-like
+        ``components.parquet`` to write: ``time``, ``rate``,
+        ``temperature`` (when the recording has it) and one column per
+        component, fastest first; header schema ``gyrocomp.components``
+        with ``components`` (the names) and ``fs_hz``. The sidecar
+        (schema :data:`~gyrocomp.decompose.SIDECAR_SCHEMA`,
+        :func:`~gyrocomp.decompose.component_stats`) goes beside it with
+        suffix ``.json``.
+    seed, workers, progress
+        As :func:`gyrocomp.decompose.decompose` (`progress` is its `callback`).
+
+    Returns
+    -------
+    decomposition : gyrocomp.decompose.Decomposition
+    sidecar : dict
+    """
+    import pandas as pd
+
+    from gyrocomp import io
+    from gyrocomp.config import settings_dict
+    from gyrocomp.decompose import SIDECAR_SCHEMA, component_stats, decompose
+
+    result = decompose(recording.rate_dps, settings, seed=seed, workers=workers, callback=progress)
+    frame = pd.DataFrame({"time": recording.time_s, "rate": recording.rate_dps})
+    if recording.temperature_c is not None:
+        frame["temperature"] = recording.temperature_c
+    for name, values in zip(result.names, result.components):
+        frame[name] = values
+    resolved = settings_dict(settings)
+    records = [recording.input_record()]
+    header = io.artefact_header("gyrocomp.components", inputs=records, settings=resolved, seed=seed)
+    header.update(components=list(result.names), fs_hz=recording.fs_hz)
+    sidecar = io.artefact_header(SIDECAR_SCHEMA, inputs=records, settings=resolved, seed=seed)
+    sidecar.update(method=settings.method, fs_hz=recording.fs_hz, **component_stats(result, recording.fs_hz))
+    io.write_table(out, frame, header)
+    io.write_json(Path(out).with_suffix(".json"), sidecar)
+    return result, sidecar
