@@ -1,0 +1,470 @@
+"""Does a noise term show its own signature? The admissibility of random walk and flicker.
+
+A flexible noise term -- a rate random walk ``K`` or flicker ``B`` -- can
+absorb any slow residual: a hidden step, a temperature bump, a ramp. The
+likelihood then prefers it, and the gap counts the residual as explained.
+:func:`check` lets such a term take the blame only when it behaves like the
+noise it claims to be, on every run (issue #16, part 3):
+
+a. **agreement** -- its level is a property of the gyro, so the runs must
+   agree on it: the likelihood-ratio statistic of one shared level against
+   one level per run (each run's white level profiled out) is ``chi^2`` with
+   ``n_runs - 1`` degrees of freedom under that hypothesis (Wilks). Each
+   run's 95 % profile-likelihood interval is reported.
+b. **innovations** -- the block-mean residual whitened under the model's
+   noise (its levels refitted on each run by maximum likelihood) (Cholesky, time ordered: for a random walk these are, up to the
+   white part, its increments) are white, Gaussian, without trend and without
+   temperature dependence:
+
+   * Ljung-Box ``Q = n (n + 2) sum_k rho_k^2 / (n - k)`` over ``h`` lags,
+     ``chi^2_h`` [1]_;
+   * trend: the score statistic of ``[1, t]`` in innovation space (a ramp
+     or a curve in time that the noise absorbed), ``chi^2_2``;
+   * temperature: the score statistic of ``temperature_bins`` equal-count
+     temperature-bin indicators, whitened (a function of temperature beyond
+     the model's that the noise absorbed), ``chi^2`` of their rank beyond the
+     design;
+   * extreme: at the timescales the term explains (c), the largest increment
+     of the residual's ``tau`` means in units of its standard deviation under
+     the model (a step is one large increment where a random walk spreads its
+     wander over all of them), with the union bound ``n 2 Phi(-z)``, times
+     the number of taus.
+
+   The score statistics project the whitened columns onto the complement of
+   the whitened design, so with the noise known they are exactly
+   ``chi^2`` with the rank of what is left.
+c. **Allan slope** -- at every octave ``tau`` where the term carries at least
+   ``explains_share`` of the model's Allan variance (the timescales it
+   explains: ``+1/2`` ADEV slope for a random walk, ``0`` for flicker), the
+   non-overlapping Allan variance of the residual lies within its interval:
+   ``avar`` is a quadratic form ``r' A r`` in the residual, whose mean and
+   Satterthwaite degrees of freedom under the model (regression removed)
+   are exact moments [2]_; two-sided ``chi^2_nu`` test.
+
+Every test returns a p-value; all tests of a term (on all runs) share
+``family_alpha`` by Bonferroni, so a noise term that *is* what the model
+says is refused with probability at most ``family_alpha``.
+
+References
+----------
+.. [1] G. M. Ljung, G. E. P. Box, "On a measure of lack of fit in time
+   series models", Biometrika 65(2), 297-303 (1978).
+.. [2] F. E. Satterthwaite, "An approximate distribution of estimates of
+   variance components", Biometrics Bulletin 2(6), 110-114 (1946).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy import linalg, optimize, stats
+
+from gyrocomp.config import bind, load_config
+from gyrocomp.diagnose.gap import effective_dof
+from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+
+__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "temperature_bins"]
+
+TERMS = ("rate_random_walk", "bias_instability")
+"""The noise terms a signature is checked for."""
+
+
+@dataclasses.dataclass(frozen=True)
+class SignatureSettings:
+    """The ``[signature]`` table; defaults equal ``configs/unexplained.toml`` (reasons there)."""
+
+    family_alpha: float = 0.01
+    ljung_box_lags: int = 10
+    max_blocks: int = 240
+    profile_span: tuple = (-10.0, 6.0)
+    profile_points: int = 33
+    explains_share: float = 0.5
+    min_allan_windows: int = 4
+    temperature_bins: int = 8
+    time_bins: int = 16
+    min_step_blocks: int = 4
+
+
+def get_config(path="unexplained") -> SignatureSettings:
+    """Bind the ``[signature]`` table of a TOML file (default: the shipped ``configs/unexplained.toml``)."""
+    return bind(SignatureSettings, load_config(path).get("signature", {}), f"{path} [signature]")
+
+
+@dataclasses.dataclass(frozen=True)
+class Signature:
+    """The verdict of :func:`check`.
+
+    Attributes
+    ----------
+    ok : bool
+        Every test passed at its Bonferroni share of ``family_alpha``.
+    reasons : tuple of str
+        One sentence per failed test (empty when `ok`).
+    stats : dict
+        ``alpha`` (per test), ``agreement`` (per-run levels, 95 % intervals,
+        statistic, p), ``runs`` (per run: each test's statistic and p).
+    """
+
+    ok: bool
+    reasons: tuple
+    stats: dict
+
+
+def check(term, runs, model, settings: SignatureSettings = SignatureSettings()) -> Signature:
+    """Whether noise `term` of `model` shows its own signature on `runs`.
+
+    Parameters
+    ----------
+    term : {"rate_random_walk", "bias_instability"}
+    runs : sequence of gyrocomp.diagnose.select.Problem
+        The runs the term should explain (fit, holdout); each provides ``y``
+        (block means), ``basis`` (:class:`NoiseBasis`), ``run``
+        (:class:`gyrocomp.diagnose.effects.Run`) and ``design_blocks(spec)``.
+    model : gyrocomp.diagnose.select.Fitted
+        A model with `term` in its noise (selected, or proposed: the trial
+        model); its ``spec`` (deterministic shapes, coefficients refitted on
+        each run) and ``noise`` are used.
+    settings : SignatureSettings
+
+    Returns
+    -------
+    Signature
+        ``ok`` False with the reasons when a test fails (module docstring).
+    """
+    if term not in TERMS:
+        raise ValueError(f"{term!r}: a signature is checked for {TERMS}")
+    s = settings
+    level = getattr(model.noise, term)
+    if not level > 0.0:
+        return Signature(False, (f"{term} has level 0 in the model",), {})
+    designs = [p.design_blocks(model.spec)[0] for p in runs]
+    free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
+    per_run = []
+    for p, X in zip(runs, designs):
+        # Each run is judged at its own maximum-likelihood levels: whether they agree is test (a).
+        own = fit_noise(p.y, X, p.basis, model.noise, free)[0]
+        per_run.append({"noise": own.datasheet_units(), **_run_tests(p, X, own, term, s)})
+    agreement = _agreement(runs, designs, model.noise, term, s) if len(runs) > 1 else None
+    replication = _replication(runs, designs, model.noise, s) if len(runs) > 1 else []
+    n_tests = sum(len([k for k in out if k not in ("noise", "allan")]) + len(out["allan"]) for out in per_run)
+    n_tests += len(replication) + (agreement is not None)
+    alpha = s.family_alpha / max(n_tests, 1)
+    reasons = []
+    for p, out in zip(runs, per_run):
+        for point in out["allan"]:
+            if point["p"] < alpha:
+                reasons.append(
+                    f"{p.run.name}: Allan variance at tau {point['tau_s']:.0f} s is {point['ratio']:.2f} times the "
+                    f"{term} model's (p = {point['p']:.2g}): the slope it claims does not hold"
+                )
+        for name, what in _WHAT.items():
+            if name in out and out[name]["p"] < alpha:
+                reasons.append(f"{p.run.name}: {what} (p = {out[name]['p']:.2g})")
+    if agreement is not None and agreement["p"] < alpha:
+        levels = ", ".join(f"{v:.3g}" for v in agreement["level"])
+        reasons.append(f"the runs disagree on the {term} level ({levels} {agreement['unit']}; p = {agreement['p']:.2g})")
+    for rep in replication:
+        if rep["p"] < alpha:
+            reasons.append(
+                f"the {rep['of']} residual of {rep['source']} repeats in {rep['target']} (p = {rep['p']:.2g}): "
+                "a deterministic effect, where a random wander would not repeat"
+            )
+    stats_out = {"alpha": alpha, "n_tests": n_tests, "agreement": agreement, "replication": replication, "runs": per_run}
+    return Signature(not reasons, tuple(reasons), stats_out)
+
+
+_WHAT = {
+    "ljung_box": "the innovations are autocorrelated (Ljung-Box): the residual is not the claimed noise",
+    "trend": "the innovations carry a trend in time: a deterministic drift is absorbed as noise",
+    "temperature": "the innovations follow the temperature changes: a temperature effect is absorbed as noise",
+    "step": "the residual holds a step that the noise absorbed",
+    "extreme": "one increment of the residual is far beyond the noise's spread: a step is absorbed as noise",
+}
+
+
+def innovations(y, X, covariance):
+    """The residual of ``y ~ N(X beta, covariance)`` whitened by the Cholesky factor, time ordered.
+
+    Parameters
+    ----------
+    y : ndarray, shape (n,)
+    X : ndarray, shape (n, p)
+    covariance : ndarray, shape (n, n)
+
+    Returns
+    -------
+    e : ndarray, shape (n,)
+        ``L^-1 (y - X beta)`` with ``beta`` the GLS estimate and ``L L' =
+        covariance``: one-step prediction errors in units of their standard
+        deviation; ``N(0, I - P)`` when the model holds (``P`` the projector
+        on the whitened design).
+    Xw : ndarray, shape (n, p)
+        ``L^-1 X``.
+    lower : ndarray, shape (n, n)
+        ``L``.
+    """
+    lower = linalg.cholesky(covariance, lower=True, check_finite=False)
+    yw = linalg.solve_triangular(lower, y, lower=True, check_finite=False)
+    Xw = linalg.solve_triangular(lower, X, lower=True, check_finite=False)
+    beta, *_ = linalg.lstsq(Xw, yw, cond=1e-12, lapack_driver="gelsy", check_finite=False)
+    return yw - Xw @ beta, Xw, lower
+
+
+def score_test(e, Xw, Gw):
+    """Score statistic of extra whitened columns `Gw` for innovations `e` of the design `Xw`.
+
+    ``||U' e||^2`` with ``U`` an orthonormal basis of the part of ``Gw``
+    orthogonal to ``Xw``; ``chi^2`` with ``rank(U)`` degrees of freedom when
+    ``e ~ N(0, I - P_X)``.
+
+    Returns
+    -------
+    stat : float
+    dof : int
+    p : float
+    coef : ndarray
+        ``U' e`` (the size of each direction found).
+    u : ndarray, shape (n, dof)
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> e = rng.standard_normal(400)
+    >>> round(score_test(e - e.mean(), np.ones((400, 1)), np.ones((400, 1)))[1], 1)  # nothing left beyond X
+    0
+    """
+    qx, _ = linalg.qr(Xw, mode="economic")
+    rest = Gw - qx @ (qx.T @ Gw)
+    u, sv, _ = linalg.svd(rest, full_matrices=False)
+    scale = np.linalg.norm(Gw, axis=0).max() if Gw.size else 0.0
+    u = u[:, sv > 1e-8 * max(scale, 1e-300)]
+    coef = u.T @ e
+    stat = float(coef @ coef)
+    dof = u.shape[1]
+    return stat, dof, float(stats.chi2.sf(stat, dof)) if dof else 1.0, coef, u
+
+
+def ljung_box(e, lags):
+    """Ljung-Box ``Q`` of `e` over `lags` lags and its ``chi^2_lags`` p-value [1]_.
+
+    Examples
+    --------
+    >>> q, p = ljung_box(np.random.default_rng(1).standard_normal(500), 10)
+    >>> bool(p > 0.01)
+    True
+    """
+    e = np.asarray(e, dtype=float) - np.mean(e)
+    n = e.size
+    denom = float(e @ e)
+    k = np.arange(1, lags + 1)
+    rho = np.array([float(e[j:] @ e[:-j]) for j in k]) / denom
+    q = float(n * (n + 2) * np.sum(rho**2 / (n - k)))
+    return q, float(stats.chi2.sf(q, lags))
+
+
+def _run_tests(problem, X, noise: NoiseModel, term, s: SignatureSettings):
+    """Tests (b) and (c) of the module docstring on one run."""
+    y = problem.y
+    cov = problem.basis.covariance(noise)
+    e, Xw, lower = innovations(y, X, cov)
+    n = y.size
+    out = {}
+    q, p = ljung_box(e, min(s.ljung_box_lags, n // 4))
+    out["ljung_box"] = {"stat": q, "p": p}
+    t = np.linspace(-1.0, 1.0, n)
+    stat, dof, p, *_ = score_test(e, Xw, np.column_stack([np.ones(n), t]))
+    out["trend"] = {"stat": stat, "dof": dof, "p": p}
+    if problem.run.temperature_c is not None:
+        temp = block_means(problem.run.temperature_c, problem.run.n_per_block)[:n]
+        bins = temperature_bins(temp, s.temperature_bins)
+        stat, dof, p, *_ = score_test(e, Xw, linalg.solve_triangular(lower, bins, lower=True, check_finite=False))
+        out["temperature"] = {"stat": stat, "dof": dof, "p": p}
+    out["step"] = step_scan(e, Xw, lower, s.min_step_blocks)
+    out["step"]["time_s"] = out["step"]["block"] * problem.basis.block_s
+    out["allan"], out["extreme"] = _timescales(problem, X, cov, lower, Xw, noise, term, s)
+    return out
+
+
+def step_scan(e, Xw, lower, min_blocks=4):
+    """The most likely step in the residual and its p-value, for innovations `e` of the design `Xw`.
+
+    For a step at every block ``j`` (at least `min_blocks` from either end)
+    the column ``1[i >= j]`` is whitened by ``L`` and made orthogonal to the
+    design; ``z_j`` is the score of its unit direction, ``N(0, 1)`` when the
+    model holds. The p-value of ``max |z_j|`` is the union bound
+    ``min(1, n_j 2 Phi(-max |z|))``, valid whatever the correlation of the
+    ``z_j``.
+
+    Returns
+    -------
+    dict
+        ``stat`` (max ``|z|``), ``block`` (first block after the step),
+        ``size`` (the step's GLS size in the residual's unit), ``p``.
+    """
+    n = e.size
+    pos = np.arange(min_blocks, n - min_blocks + 1)
+    if not pos.size:
+        return {"stat": 0.0, "block": 0, "size": 0.0, "p": 1.0}
+    steps = (np.arange(n)[:, None] >= pos[None, :]).astype(float)
+    g = linalg.solve_triangular(lower, steps, lower=True, check_finite=False)
+    qx, _ = linalg.qr(Xw, mode="economic")
+    g -= qx @ (qx.T @ g)
+    norm = np.linalg.norm(g, axis=0)
+    z = (g.T @ e) / np.maximum(norm, 1e-300)
+    j = int(np.argmax(np.abs(z)))
+    p = float(min(1.0, pos.size * 2.0 * stats.norm.sf(abs(z[j]))))
+    return {"stat": float(abs(z[j])), "block": int(pos[j]), "size": float(z[j] / norm[j]), "p": p}
+
+
+def temperature_bins(temperature_c, n_bins):
+    """Indicator columns of `n_bins` equal-count temperature bins (a piecewise-constant function of T).
+
+    Examples
+    --------
+    >>> temperature_bins(np.arange(8.0), 4).sum(axis=0).tolist()
+    [2.0, 2.0, 2.0, 2.0]
+    """
+    edges = np.quantile(temperature_c, np.linspace(0.0, 1.0, n_bins + 1)[1:-1])
+    idx = np.searchsorted(edges, temperature_c, side="right")
+    return (idx[:, None] == np.arange(n_bins)[None, :]).astype(float)
+
+
+def _allan_taus(problem, noise: NoiseModel, term, s: SignatureSettings):
+    """Octave block multiples ``m`` at which `term` carries ``explains_share`` of the model's AVAR."""
+    tb, n = problem.basis.block_s, problem.y.size
+    ms = 2 ** np.arange(int(np.log2(max(n // s.min_allan_windows, 1))) + 1)
+    ms = ms[n // ms >= s.min_allan_windows]
+    tau = ms * tb
+    part = (FLICKER_AVAR * noise.bias_instability**2) * np.ones_like(tau) if term == "bias_instability" else noise.rate_random_walk**2 * tau / 3.0
+    return ms[part >= s.explains_share * noise.avar(tau)]
+
+
+def _timescales(problem, X, cov, lower, Xw, noise, term, s):
+    """Tests (c) and (b, extreme) at the taus `term` explains.
+
+    The residual's non-overlapping AVAR against its exact moments, and the
+    largest increment of the ``tau`` means in units of its standard
+    deviation under the model (union bound over the increments: valid
+    whatever their correlation).
+    """
+    ms = _allan_taus(problem, noise, term, s)
+    if not ms.size:
+        return [], {"stat": 0.0, "p": 1.0}
+    y = problem.y
+    n = y.size
+    # r = R y with R = I - X (Xw' Xw)^-1 Xw' L^-1: the GLS residual; under the model Cov(r) = R Sigma R'.
+    pinv = linalg.pinv(Xw)
+    resid_maker = np.eye(n) - X @ pinv @ linalg.solve_triangular(lower, np.eye(n), lower=True, check_finite=False)
+    r = resid_maker @ y
+    cov_r = resid_maker @ cov @ resid_maker.T
+    allan, extreme = [], {"stat": 0.0, "p": 1.0}
+    for m in ms:
+        k = n // m
+        agg = np.hstack([np.kron(np.eye(k), np.full((1, m), 1.0 / m)), np.zeros((k, n - k * m))])
+        diff = np.diff(agg, axis=0)
+        form = diff / np.sqrt(2.0 * (k - 1))
+        avar = float(np.sum((form @ r) ** 2))
+        var_d = np.diag(diff @ cov_r @ diff.T)
+        mean = float(np.sum(var_d) / (2.0 * (k - 1)))
+        nu = effective_dof(form, cov_r)
+        x = nu * avar / mean
+        p = float(min(1.0, 2.0 * min(stats.chi2.cdf(x, nu), stats.chi2.sf(x, nu))))
+        allan.append({"tau_s": float(m * problem.basis.block_s), "ratio": avar / mean, "dof": nu, "p": p})
+        z = np.abs(diff @ r) / np.sqrt(var_d)
+        p_max = float(min(1.0, z.size * 2.0 * stats.norm.sf(z.max())))
+        if p_max * ms.size < extreme["p"]:
+            # Bonferroni over the taus tried: the smallest p times their number.
+            j = int(np.argmax(z))
+            extreme = {"stat": float(z.max()), "tau_s": float(m * problem.basis.block_s), "time_s": float((j + 1) * m * problem.basis.block_s), "p": p_max * ms.size}
+    return allan, extreme
+
+
+def _replication(runs, designs, noise: NoiseModel, s: SignatureSettings):
+    """Test (a'): does one run's slow residual, as a function of time or of temperature, repeat in another run?
+
+    For every ordered pair of runs the source run's GLS residual is averaged
+    in ``time_bins`` equal bins of time since power-on (and in
+    ``temperature_bins`` equal-count temperature bins); that step function,
+    read at the target run's times (temperatures), is one whitened column
+    of a score test on the target run. The source's noise is independent of
+    the target's, so the statistic is ``chi^2_1`` when the model holds.
+    """
+    prepared = []
+    for p, X in zip(runs, designs):
+        cov = p.basis.covariance(noise)
+        e, Xw, lower = innovations(p.y, X, cov)
+        beta, *_ = linalg.lstsq(Xw, linalg.solve_triangular(lower, p.y, lower=True, check_finite=False), cond=1e-12)
+        t = np.arange(p.y.size) * p.basis.block_s
+        temp = None
+        if p.run.temperature_c is not None:
+            temp = block_means(p.run.temperature_c, p.run.n_per_block)[: p.y.size]
+        prepared.append((p, e, Xw, lower, p.y - X @ beta, t, temp))
+    out = []
+    for a, (pa, _, _, _, ra, ta, Ta) in enumerate(prepared):
+        for b, (pb, eb, Xwb, lowb, _, tb, Tb) in enumerate(prepared):
+            if a == b:
+                continue
+            shapes = {"time": _binned(ta, ra, tb, np.linspace(0.0, min(ta[-1], tb[-1]), s.time_bins + 1)[1:-1])}
+            if Ta is not None and Tb is not None:
+                edges = np.quantile(Ta, np.linspace(0.0, 1.0, s.temperature_bins + 1)[1:-1])
+                shapes["temperature"] = _binned(Ta, ra, Tb, edges)
+            for of, g in shapes.items():
+                gw = linalg.solve_triangular(lowb, g[:, None], lower=True, check_finite=False)
+                stat, dof, p, *_ = score_test(eb, Xwb, gw)
+                out.append({"of": of, "source": pa.run.name, "target": pb.run.name, "stat": stat, "p": p})
+    return out
+
+
+def _binned(x_source, r_source, x_target, edges):
+    """The bin means of `r_source` over `x_source` (bins cut at `edges`), read at `x_target`."""
+    k = edges.size + 1
+    src = np.searchsorted(edges, x_source, side="right")
+    means = np.bincount(src, weights=r_source, minlength=k) / np.maximum(np.bincount(src, minlength=k), 1)
+    return means[np.searchsorted(edges, x_target, side="right")]
+
+
+def _agreement(runs, designs, noise: NoiseModel, term, s: SignatureSettings):
+    """Test (a): profile ``-2 log L`` of each run over the term's log-variance, white level profiled out."""
+    grid = np.log(getattr(noise, term) ** 2) + np.linspace(*s.profile_span, s.profile_points)
+    curves = []
+    for p, X in zip(runs, designs):
+        y, Xm, basis = _merged(p, X, s.max_blocks)
+        curves.append(np.array([_profile_white(y, Xm, basis, noise, term, g) for g in grid]))
+    curves = np.array(curves)
+    lows = curves.min(axis=1)
+    stat = float(max(0.0, curves.sum(axis=0).min() - lows.sum()))
+    p = float(stats.chi2.sf(stat, len(runs) - 1))
+    crit = stats.chi2.ppf(0.95, 1)
+    scale = 3600.0 * 60.0 if term == "rate_random_walk" else 3600.0
+    unit = "deg/h/sqrt(h)" if term == "rate_random_walk" else "deg/h"
+    level, interval = [], []
+    for c, low in zip(curves, lows):
+        inside = grid[c - low <= crit]
+        level.append(float(np.exp(0.5 * grid[np.argmin(c)]) * scale))
+        interval.append([float(np.exp(0.5 * inside.min()) * scale), float(np.exp(0.5 * inside.max()) * scale)])
+    return {"stat": stat, "p": p, "level": level, "interval_95": interval, "unit": unit}
+
+
+def _merged(problem, X, max_blocks):
+    """Block means and regressors merged to at most `max_blocks` blocks, with their basis."""
+    y = problem.y
+    f = -(-y.size // max_blocks)
+    k = y.size // f
+    return (
+        y[: k * f].reshape(k, f).mean(axis=1),
+        X[: k * f].reshape(k, f, X.shape[1]).mean(axis=1),
+        NoiseBasis(k, problem.basis.block_s * f),
+    )
+
+
+def _profile_white(y, X, basis, noise: NoiseModel, term, log_var):
+    """``min`` over the white level of ``-2 log L`` with `term`'s variance ``exp(log_var)``."""
+    start = np.log(noise.arw**2)
+
+    def dev(z):
+        trial = dataclasses.replace(noise, arw=float(np.exp(0.5 * z)), **{term: float(np.exp(0.5 * log_var))})
+        return profile_deviance(y, X, basis.whitener(trial))[0]
+
+    best = optimize.minimize_scalar(dev, bounds=(start - 4.0, start + 4.0), method="bounded", options={"xatol": 1e-3})
+    return float(best.fun)

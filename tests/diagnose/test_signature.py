@@ -1,0 +1,138 @@
+"""The signature of a noise term (gyrocomp.diagnose.signature) on constructed cases.
+
+Recordings are built here from numpy draws (white noise, a random walk, a
+step, a temperature bump, a ramp) and from :func:`gyrocomp.sim.noise.flicker`
+(a synthesis by spectral shaping, independent of the likelihood's
+Gauss-Markov covariance); the noise term is fitted by
+:func:`gyrocomp.diagnose.select.extend` as the diagnosis would.
+"""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from gyrocomp.diagnose import DiagnoseSettings
+from gyrocomp.diagnose import signature as sg
+from gyrocomp.diagnose.effects import Run, TemperatureScale
+from gyrocomp.diagnose.select import Problem, extend, fit_baseline
+from gyrocomp.sim.noise import flicker
+
+N = 0.005  # white rate noise [deg/s/sqrt(Hz)] (0.3 deg/sqrt(h))
+K = 1.0 / 3600.0 / 60.0  # rate random walk [deg/s/sqrt(s)] (1 deg/h/sqrt(h))
+
+
+def _recording(seed, kind="none", amp=0.0, rrw=0.0, bias=0.0, hours=8.0, fs=1.0):
+    """Time, rate and temperature of a static gyro in an oven ramping 20 -> 60 -> 20 degC."""
+    rng = np.random.default_rng(seed)
+    n = int(hours * 3600 * fs)
+    t = np.arange(n) / fs
+    temp = 20.0 + 40.0 * (1.0 - np.abs(2.0 * t / t[-1] - 1.0))
+    x = N * np.sqrt(fs) * rng.standard_normal(n) + 0.002 * (temp - 40.0) / 20.0
+    if rrw:
+        x += np.cumsum(rrw / np.sqrt(fs) * rng.standard_normal(n))
+    if bias:
+        x += flicker(n, fs, bias * 3600.0, rng)
+    if kind == "step":
+        x += amp * (t > 0.37 * t[-1])
+    elif kind == "bump":
+        x += amp * np.exp(-0.5 * ((temp - 45.0) / 3.0) ** 2)
+    elif kind == "ramp":
+        x += amp * t / t[-1]
+    return t, x, temp, fs
+
+
+def _problems(*recordings, block_s=40.0):
+    scale = TemperatureScale.of(recordings[0][2])
+    return [
+        Problem(Run(f"run{k}", t, x, temp, fs, int(block_s * fs), 60.0), DiagnoseSettings(), scale, 3)
+        for k, (t, x, temp, fs) in enumerate(recordings)
+    ]
+
+
+def _check(term, kind="none", amp=0.0, seed=0, **noise):
+    runs = _problems(_recording(seed, kind, amp, **noise), _recording(seed + 1000, kind, amp, **noise))
+    model = extend(runs[0], fit_baseline(runs[0]), term)
+    return sg.check(term, runs, model)
+
+
+def test_config_matches_defaults():
+    assert sg.get_config() == sg.SignatureSettings()
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_true_random_walk_passes(seed):
+    result = _check("rate_random_walk", rrw=K, seed=seed)
+    assert result.ok, result.reasons
+    # deg/h/sqrt(h): each run's 95 % interval reaches within a factor 2 of the true 1 (the cubic in
+    # temperature takes a share of the wander on this triangular profile, so the level reads low)
+    for low, high in result.stats["agreement"]["interval_95"]:
+        assert low < 1.0 and high > 0.5
+
+
+def test_true_flicker_passes():
+    result = _check("bias_instability", bias=3.0 / 3600.0, seed=3)
+    assert result.ok, result.reasons
+
+
+@pytest.mark.parametrize(
+    ("kind", "amp", "words"),
+    [
+        ("step", 0.002, "step"),
+        ("bump", 0.01, "Allan variance"),
+        ("ramp", 0.01, "trend in time"),
+    ],
+)
+def test_slow_deterministic_residual_is_refused(kind, amp, words):
+    result = _check("rate_random_walk", kind, amp, seed=10)
+    assert not result.ok
+    assert any(words in r for r in result.reasons), result.reasons
+
+
+def test_runs_that_disagree_on_the_level_are_refused():
+    runs = _problems(_recording(5, rrw=4.0 * K), _recording(6, rrw=0.25 * K))
+    model = extend(runs[0], fit_baseline(runs[0]), "rate_random_walk")
+    result = sg.check("rate_random_walk", runs, model)
+    assert any("disagree" in r for r in result.reasons), result.reasons
+    (lo0, hi0), (lo1, hi1) = result.stats["agreement"]["interval_95"]
+    assert hi1 < lo0
+
+
+def test_ljung_box_false_alarm_rate():
+    rng = np.random.default_rng(0)
+    p = np.array([sg.ljung_box(rng.standard_normal(300), 10)[1] for _ in range(400)])
+    assert abs(np.mean(p < 0.05) - 0.05) < 3.0 * np.sqrt(0.05 * 0.95 / 400) + 0.01
+    assert sg.ljung_box(np.cumsum(rng.standard_normal(300)), 10)[1] < 1e-6
+
+
+def test_score_test_is_chi2_under_the_model():
+    rng = np.random.default_rng(1)
+    n = 200
+    X = np.column_stack([np.ones(n), np.linspace(-1, 1, n)])
+    G = rng.standard_normal((n, 3))
+    q, _ = np.linalg.qr(X)
+    stat = []
+    for _ in range(500):
+        z = rng.standard_normal(n)
+        e = z - q @ (q.T @ z)
+        stat.append(sg.score_test(e, X, G)[0])
+    assert stats.kstest(stat, stats.chi2(3).cdf).pvalue > 0.01
+
+
+def test_step_scan_false_alarm_rate_and_power():
+    rng = np.random.default_rng(2)
+    n = 300
+    X = np.ones((n, 1))
+    lower = np.eye(n)
+    hits = 0
+    for _ in range(300):
+        z = rng.standard_normal(n)
+        hits += sg.step_scan(z - z.mean(), X, lower)["p"] < 0.05
+    assert hits / 300 <= 0.05 + 3.0 * np.sqrt(0.05 * 0.95 / 300)  # the union bound is conservative
+    y = rng.standard_normal(n) + 1.0 * (np.arange(n) >= 120)
+    found = sg.step_scan(y - y.mean(), X, lower)
+    assert found["p"] < 1e-6 and abs(found["block"] - 120) <= 6 and found["size"] == pytest.approx(1.0, abs=0.3)
+
+
+def test_unknown_term():
+    with pytest.raises(ValueError, match="signature is checked"):
+        sg.check("warmup", [], None)
