@@ -7,7 +7,7 @@ import os
 
 from gyrocomp.cli._app import app
 
-_COMMANDS = ("simulate", "allan", "decompose", "train", "compensate", "run", "batch", "diagnose", "classify")
+_COMMANDS = ("simulate", "allan", "decompose", "train", "compensate", "export", "run", "batch", "diagnose", "classify")
 """Command modules of this package; each registers its commands on ``app``."""
 
 for _name in _COMMANDS:

@@ -18,6 +18,7 @@ def compensate(
     model: Annotated[Path, typer.Argument(help="model.json from `gyrocomp train`.")],
     mode: Annotated[str, typer.Option("--mode", help="causal: rate - f(T, dT/dt) only, what firmware runs (keeps a true angular rate); full: the paper's offline decompose + denoise + compensate.")] = "causal",
     out: Annotated[Path, typer.Option("--out", "-o", help="compensated.parquet (or .csv; - for CSV on stdout); compensation.json goes beside it (same stem).")] = ...,
+    clamp: Annotated[Optional[bool], typer.Option("--clamp/--no-clamp", help="Clamp temperature and dT/dt to the training ranges, as firmware does (default in causal mode; in full mode the model's clip_inputs). --no-clamp extrapolates.", show_default=False)] = None,
     seed: Annotated[Optional[int], typer.Option("--seed", help="Seed of the decomposition in full mode (default: the training run's).")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Processes for the decomposition in full mode.")] = 1,
     time_col: TimeCol = "time",
@@ -32,7 +33,8 @@ def compensate(
 
     Writes time, rate, temperature, drift_model and compensated [deg/s].
     Warns (on stderr) when the recording leaves the model's training
-    temperature range, and by how much. A foreign, corrupted or newer
+    temperature or dT/dt range, and by how much; causal mode clamps both
+    to those ranges unless --no-clamp. A foreign, corrupted or newer
     model.json is refused with exit code 2.
     """
     with report_errors(ctx):

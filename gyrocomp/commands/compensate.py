@@ -21,6 +21,9 @@ class Options:
     mode : {"causal", "full"}
         ``causal``: rate - f(T, dT/dt) only (what firmware runs); ``full``: the
         paper's offline decompose + denoise + compensate.
+    clamp : bool or None
+        Clamp temperature and dT/dt to the training ranges (``None``: yes in
+        causal mode, the model's ``clip_inputs`` in full mode); False extrapolates.
     seed : int or None
         Seed of the decomposition in full mode (``None``: the training run's).
     workers : int
@@ -31,6 +34,7 @@ class Options:
     """
 
     mode: str = "causal"
+    clamp: Optional[bool] = None
     seed: Optional[int] = None
     workers: int = 1
     columns: ColumnSpec = ColumnSpec()
@@ -68,7 +72,7 @@ def to_files(
     recording = io.read_recording(recording_path, options.columns, require_temperature=True, min_samples=2, resample=options.resample)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        frame, summary = compensate(recording, drift, options.mode, seed=options.seed, workers=options.workers, callback=progress)
+        frame, summary = compensate(recording, drift, options.mode, clamp=options.clamp, seed=options.seed, workers=options.workers, callback=progress)
     if str(out) == "-":
         io.write_table(out, frame, {})
     else:

@@ -11,7 +11,13 @@
   pipeline, ``full`` is ``rate - f(T, dT/dt)`` with the centred estimate.
 * ``causal`` (what firmware runs): ``rate - f(T, dT/dt)``, with the
   one-sided estimate of dT/dt; nothing but the temperature model touches
-  the rate, so a true angular rate passes unchanged.
+  the rate, so a true angular rate passes unchanged. Temperature and dT/dt
+  are clamped to their training ranges first (:func:`clamp_inputs`), as
+  PX4 and ArduPilot clamp the temperature to their TMIN..TMAX; ``clamp=False``
+  extrapolates instead.
+
+Either way a recording that leaves a training range is reported, per input
+and by how much (an :class:`ExtrapolationWarning` and ``summary["warnings"]``).
 
 ``drift_model`` is the sum of the segments' predicted drifts [deg/s].
 """
@@ -37,6 +43,7 @@ __all__ = [
     "ExtrapolationWarning",
     "DriftModel",
     "load_model",
+    "clamp_inputs",
     "compensate",
 ]
 
@@ -45,7 +52,7 @@ MODES = ("full", "causal")
 
 
 class ExtrapolationWarning(UserWarning):
-    """A recording leaves the temperature range the model was trained on."""
+    """A recording leaves the temperature or temperature-rate range the model was trained on."""
 
 
 @dataclasses.dataclass
@@ -78,17 +85,17 @@ class DriftModel:
         """[temperature, temperature rate] with the model's estimator (centred or causal)."""
         return rate_estimator.model_inputs(temperature_c, fs_hz, self.rate, causal=causal)
 
-    def predict(self, X: np.ndarray) -> dict:
+    def predict(self, X: np.ndarray, *, clamp: bool | None = None) -> dict:
         """Predicted drift of each modelled segment [deg/s] for inputs `X` (n_samples, 2).
 
-        With ``clip_inputs`` each input is first held inside its training
-        range; with ``clip_output`` each prediction inside the range of its
-        segment's training target.
+        With `clamp` (default: the model's ``clip_inputs``) each input is
+        first held inside its training range (:func:`clamp_inputs`); with
+        ``clip_output`` each prediction inside the range of its segment's
+        training target.
         """
         X = np.asarray(X, dtype=float)
-        if self.clip_inputs:
-            (t_lo, t_hi), (r_lo, r_hi) = self.temperature_range_c, self.rate_range_c_per_s
-            X = np.clip(X, [t_lo, r_lo], [t_hi, r_hi])
+        if self.clip_inputs if clamp is None else clamp:
+            X = clamp_inputs(X, self)
         out = {}
         for segment, (learner, x_offset, x_scale, y_offset, y_scale, y_range) in self.learners.items():
             y = learner.predict((X - x_offset) / x_scale) * y_scale + y_offset
@@ -137,11 +144,34 @@ def load_model(obj: dict, name: str = "model.json") -> DriftModel:
     return DriftModel(obj, name, kind, parallel, rate, learners, *clips)
 
 
+def clamp_inputs(X: np.ndarray, model: DriftModel) -> np.ndarray:
+    """Hold temperature [degC] and dT/dt [degC/s] inside the model's training ranges.
+
+    Firmware does the same with the temperature (PX4 ``TC_G<i>_TMIN/TMAX``,
+    ArduPilot ``INS_TCAL<n>_TMIN/TMAX``): outside the calibrated range the
+    correction stays at its value at the edge instead of following the
+    polynomial out.
+
+    Parameters
+    ----------
+    X : ndarray, shape (n_samples, 2)
+        Columns temperature [degC] and temperature rate [degC/s].
+    model : DriftModel
+
+    Returns
+    -------
+    ndarray, shape (n_samples, 2)
+    """
+    (t_lo, t_hi), (r_lo, r_hi) = model.temperature_range_c, model.rate_range_c_per_s
+    return np.clip(X, [t_lo, r_lo], [t_hi, r_hi])
+
+
 def compensate(
     recording: io.Recording,
     model: DriftModel,
     mode: str = "causal",
     *,
+    clamp: bool | None = None,
     seed: int | None = None,
     workers: int = 1,
     callback=None,
@@ -156,6 +186,10 @@ def compensate(
         From :func:`load_model`.
     mode : {"full", "causal"}
         See the module notes.
+    clamp : bool or None
+        Clamp temperature and dT/dt to the training ranges before the model
+        (:func:`clamp_inputs`). Default: True in ``causal`` mode, the
+        model's ``clip_inputs`` in ``full`` mode. False extrapolates.
     seed : int or None
         Seed of the decomposition in ``full`` mode; default the seed the
         training run was decomposed with.
@@ -180,10 +214,12 @@ def compensate(
     temperature = data["temperature"].to_numpy(dtype=float)
     rate = data["rate"].to_numpy(dtype=float)
     X = model.inputs(temperature, recording.fs_hz, causal=(mode == "causal"))
-    predicted = model.predict(X)
+    if clamp is None:
+        clamp = True if mode == "causal" else model.clip_inputs
+    predicted = model.predict(X, clamp=clamp)
     drift_model = np.sum(list(predicted.values()), axis=0)
-    summary = {"mode": mode, "kind": model.kind, "parallel": model.parallel}
-    summary["ranges"], summary["warnings"] = _ranges(recording.name, X, model)
+    summary = {"mode": mode, "kind": model.kind, "parallel": model.parallel, "clamp": bool(clamp)}
+    summary["ranges"], summary["warnings"] = _ranges(recording.name, X, model, clamp)
     if mode == "full" and model.parallel:
         if seed is None:
             seed = model.obj.get("settings", {}).get("decompose_seed")
@@ -221,31 +257,30 @@ def _parallel_segments(rate, model: DriftModel, seed, workers, callback):
     return segments(np.asarray(result.components), labels, denoise_settings), classes
 
 
-def _ranges(name: str, X: np.ndarray, model: DriftModel) -> tuple[dict, list[str]]:
-    lo, hi = model.temperature_range_c
-    t_lo, t_hi = float(X[:, 0].min()), float(X[:, 0].max())
-    below, above = max(0.0, lo - t_lo), max(0.0, t_hi - hi)
-    outside = float(np.mean((X[:, 0] < lo) | (X[:, 0] > hi)))
-    r_lo, r_hi = model.rate_range_c_per_s
-    rate_outside = float(np.mean((X[:, 1] < r_lo) | (X[:, 1] > r_hi)))
-    ranges = {
-        "temperature_c": {"min": t_lo, "max": t_hi, "training_min": lo, "training_max": hi,
-                          "below_by": below, "above_by": above, "share_outside": outside},
-        "temperature_rate_c_per_s": {"min": float(X[:, 1].min()), "max": float(X[:, 1].max()),
-                                     "training_min": r_lo, "training_max": r_hi, "share_outside": rate_outside},
-    }
-    messages = []
-    if below > 0 or above > 0:
+def _ranges(name: str, X: np.ndarray, model: DriftModel, clamp: bool) -> tuple[dict, list[str]]:
+    """Each input's range met against its training range; one warning per input that leaves it."""
+    ranges, messages = {}, []
+    inputs = (
+        ("temperature_c", "temperature", "degC", model.temperature_range_c),
+        ("temperature_rate_c_per_s", "dT/dt", "degC/s", model.rate_range_c_per_s),
+    )
+    for column, (key, label, unit, (lo, hi)) in enumerate(inputs):
+        x = X[:, column]
+        x_lo, x_hi = float(x.min()), float(x.max())
+        tolerance = 1e-9 * max(hi - lo, abs(lo), abs(hi))  # the training run itself, to rounding
+        below, above = (d if d > tolerance else 0.0 for d in (lo - x_lo, x_hi - hi))
+        outside = float(np.mean((x < lo) | (x > hi)))
+        ranges[key] = {"min": x_lo, "max": x_hi, "training_min": lo, "training_max": hi,
+                       "below_by": below, "above_by": above, "share_outside": outside}
+        if below == 0 and above == 0:
+            continue
         by = " and ".join(
-            text for text in (
-                f"{below:.3g} degC below" if below > 0 else "",
-                f"{above:.3g} degC above" if above > 0 else "",
-            ) if text
+            text for text in (f"{below:.3g} {unit} below" if below > 0 else "", f"{above:.3g} {unit} above" if above > 0 else "") if text
         )
+        treated = "clamped to the range there" if clamp else "the model extrapolates there"
         message = (
-            f"{name}: temperature {t_lo:.3g}..{t_hi:.3g} degC leaves the training range "
-            f"[{lo:.3g}, {hi:.3g}] degC of {model.name} by {by} ({outside:.1%} of samples); "
-            f"the model extrapolates there"
+            f"{name}: {label} {x_lo:.3g}..{x_hi:.3g} {unit} leaves the training range "
+            f"[{lo:.3g}, {hi:.3g}] {unit} of {model.name} by {by} ({outside:.1%} of samples); {treated}"
         )
         warnings.warn(message, ExtrapolationWarning, stacklevel=3)
         messages.append(message)

@@ -1,0 +1,64 @@
+"""``gyrocomp export``: a model.json as PX4 / ArduPilot parameters, a C99 header or plain JSON."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from gyrocomp.cli._app import RateCol, RateUnit, TempCol, TempUnit, TimeCol, TimeUnit, app, column_spec, console_for, report_errors
+
+
+@app.command()
+def export(
+    ctx: typer.Context,
+    model: Annotated[Path, typer.Argument(help="model.json from `gyrocomp train`.")],
+    fmt: Annotated[str, typer.Option("--format", "-f", help="px4 (QGroundControl .params), ardupilot (MAVProxy / Mission Planner .parm), c (C99 header with test vectors), json-plain (physical units).")] = ...,
+    out: Annotated[Path, typer.Option("--out", "-o", help="File to write (- for stdout).")] = ...,
+    fit_polynomial: Annotated[bool, typer.Option("--fit-polynomial", help="px4 / ardupilot: fit the nearest cubic to a model they cannot hold (dT/dt term, network) and report the error it adds.")] = False,
+    axis: Annotated[str, typer.Option("--axis", help="Firmware axis (x, y, z) of a single-axis model.")] = "x",
+    instance: Annotated[Optional[int], typer.Option("--instance", help="PX4 gyro slot TC_G<i> (0..3, default 0); ArduPilot IMU INS_TCAL<n> (1..3, default 1).")] = None,
+    device_id: Annotated[int, typer.Option("--device-id", help="PX4 TC_G<i>_ID: the gyro's device id (CAL_GYRO<n>_ID); PX4 applies the slot to that sensor only.")] = 0,
+    vectors: Annotated[Optional[Path], typer.Option("--vectors", help="c: recording whose first --n-vectors samples become the test vectors (default: a synthetic sweep across and beyond the training ranges).")] = None,
+    n_vectors: Annotated[int, typer.Option("--n-vectors", help="c: number of test-vector samples.")] = 2048,
+    prefix: Annotated[str, typer.Option("--prefix", help="c: prefix of the header's names.")] = "gyrocomp",
+    time_col: TimeCol = "time",
+    rate_col: RateCol = "rate",
+    temp_col: TempCol = "temperature",
+    time_unit: TimeUnit = "s",
+    rate_unit: RateUnit = "deg/s",
+    temp_unit: TempUnit = "degC",
+) -> None:
+    """Write a trained model in a firmware's or another tool's own form.
+
+    px4 and ardupilot hold a cubic in temperature per axis, clamped to the
+    training range; a model with a dT/dt term or a learned network is
+    refused, naming what the format lacks, unless --fit-polynomial. c runs
+    the whole causal model (dT/dt in O(1) per sample, clamping, the
+    networks' forward passes) with test vectors from compensate --mode causal.
+    """
+    with report_errors(ctx):
+        from gyrocomp import io
+        from gyrocomp.export import ExportOptions, export_model
+        from gyrocomp.pipeline import load_model
+
+        drift = load_model(io.read_json(model, "gyrocomp.model"), str(model))
+        recording = None
+        if vectors is not None:
+            spec = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
+            recording = io.read_recording(vectors, spec, require_temperature=True, min_samples=2)
+        options = ExportOptions(fit_polynomial, axis.lower(), instance, device_id, recording, n_vectors, prefix)
+        text, summary = export_model(drift, fmt, options)
+        if str(out) == "-":
+            sys.stdout.write(text)
+        else:
+            with io.atomic_path(out) as tmp:
+                Path(tmp).write_text(text, encoding="utf-8")
+    console = console_for(ctx, out)
+    added = summary.get("added_error_deg_h")
+    note = f"; the fitted cubic adds {added['rms']:.3g} deg/h RMS, {added['max']:.3g} deg/h at most over the training range" if added else ""
+    if fmt == "px4" and device_id == 0:
+        print("gyrocomp: warning: TC_G ID = 0; set --device-id to the gyro's CAL_GYRO<n>_ID, PX4 applies the slot to that sensor only", file=sys.stderr)
+    console.print(f"{out}: {drift.kind} model as {fmt}{note}", markup=False, highlight=False)
