@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from gyrocomp.cli._app import RateCol, RateUnit, TempCol, TempUnit, TimeCol, TimeUnit, app, column_spec, console_for, report_errors
+from gyrocomp.cli._app import RateCol, RateUnit, TempCol, TempUnit, TimeCol, TimeUnit, app, console_for, report_errors
 
 
 @app.command()
@@ -40,22 +40,9 @@ def export(
     networks' forward passes) with test vectors from compensate --mode causal.
     """
     with report_errors(ctx):
-        from gyrocomp import io
-        from gyrocomp.export import ExportOptions, export_model
-        from gyrocomp.pipeline import load_model
+        from gyrocomp.commands import export as stage, from_params
 
-        drift = load_model(io.read_json(model, "gyrocomp.model"), str(model))
-        recording = None
-        if vectors is not None:
-            spec = column_spec(time_col, rate_col, temp_col, time_unit, rate_unit, temp_unit)
-            recording = io.read_recording(vectors, spec, require_temperature=True, min_samples=2)
-        options = ExportOptions(fit_polynomial, axis.lower(), instance, device_id, recording, n_vectors, prefix)
-        text, summary = export_model(drift, fmt, options)
-        if str(out) == "-":
-            sys.stdout.write(text)
-        else:
-            with io.atomic_path(out) as tmp:
-                Path(tmp).write_text(text, encoding="utf-8")
+        drift, summary = stage.to_files([model], out, from_params(stage.Options, ctx.params))
     console = console_for(ctx, out)
     added = summary.get("added_error_deg_h")
     note = f"; the fitted cubic adds {added['rms']:.3g} deg/h RMS, {added['max']:.3g} deg/h at most over the training range" if added else ""
