@@ -24,6 +24,7 @@ import io as _stdio
 import json
 import math
 import os
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -442,16 +443,47 @@ def read_json(path: str | os.PathLike, schema: str | None = None) -> dict:
     """Read a JSON artefact; with `schema`, check its header (:func:`check_header`)."""
     name, raw = _read_bytes(path)
     try:
-        obj = json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as err:
-        line = getattr(err, "lineno", None)
+        obj = json.loads(raw.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite_float)
+    except (UnicodeDecodeError, ValueError) as err:  # JSONDecodeError is a ValueError
+        line = getattr(err, "lineno", None) or _line_of(raw, getattr(err, "token", None))
         at = f" line {line}" if line else ""
         raise InputError(f"{name}{at}: not valid JSON ({err.args[0] if err.args else err})") from None
+    except RecursionError:
+        raise InputError(f"{name}: not valid JSON (nested too deeply)") from None
     if not isinstance(obj, dict):
         raise InputError(f"{name}: expected a JSON object at the top level")
     if schema is not None:
         check_header(obj, schema, name)
     return obj
+
+
+class _BadNumber(ValueError):
+    """A number JSON cannot hold; `token` is its text, to find its line."""
+
+    def __init__(self, token: str, why: str):
+        super().__init__(f"{token} {why}")
+        self.token = token
+
+
+def _no_constant(text: str):
+    """JSON has no NaN or Infinity; Python's reader would accept them."""
+    raise _BadNumber(text, "is not a JSON number")
+
+
+def _finite_float(text: str) -> float:
+    """A JSON number that overflows a double (``1e999``) is refused, not read as infinity."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise _BadNumber(text, "overflows a double")
+    return value
+
+
+def _line_of(raw: bytes, token: str | None) -> int | None:
+    """Line (1-based) of the first bare `token` in `raw`, or None."""
+    if not token:
+        return None
+    found = re.search(rb'(?<![\w."])' + re.escape(token.encode()) + rb'(?![\w."])', raw)
+    return raw.count(b"\n", 0, found.start()) + 1 if found else None
 
 
 @contextlib.contextmanager

@@ -15,6 +15,7 @@ after a round trip are identical.
 
 from __future__ import annotations
 
+import abc
 import inspect
 import math
 from typing import Any
@@ -35,17 +36,20 @@ class NotFittedError(GyrocompError, ValueError, AttributeError):
     """
 
 
-class Learner:
+class Learner(abc.ABC):
     """Base of the learners: parameters, fitted state and the JSON round trip.
 
     Subclasses set ``kind`` (the ``"kind"`` key of :meth:`to_dict`),
-    ``_fitted`` (names of the learned attributes, all ending in ``_``) and
-    ``_arrays`` (those of them that are float arrays).
+    ``_fitted`` (names of the learned attributes, all ending in ``_``),
+    ``_arrays`` (those of them that are float arrays) and ``_may_be_empty``
+    (those arrays that may legitimately hold nothing, such as a history that
+    was not recorded), and implement :meth:`_check_loaded`.
     """
 
     kind: str = ""
     _fitted: tuple[str, ...] = ()
     _arrays: frozenset[str] = frozenset()
+    _may_be_empty: frozenset[str] = frozenset()
 
     # --- parameters -------------------------------------------------------
     @classmethod
@@ -91,11 +95,23 @@ class Learner:
         return {name: _plain(getattr(self, name), f"{name}") for name in self._fitted}
 
     def _decode_fitted(self, fitted: dict[str, Any]) -> None:
+        owner = type(self).__name__
         for name in self._fitted:
             value = fitted[name]
             if name in self._arrays:
-                value = np.asarray(value, dtype=np.float64)
+                value = finite_array(owner, name, value, empty_ok=name in self._may_be_empty)
+            elif name == "n_features_in_":
+                value = check_int(owner, name, value, 1)
             setattr(self, name, value)
+
+    @abc.abstractmethod
+    def _check_loaded(self) -> None:
+        """Parameters, and the shapes of the learned arrays, of a model read from a file.
+
+        Each learner checks its ``__init__`` arguments as ``fit`` does and that
+        every learned array has the shape its parameters imply, so a
+        hand-edited or truncated model fails on load, not with NaN output.
+        """
 
     # --- JSON round trip --------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
@@ -135,10 +151,13 @@ class Learner:
         model = cls(**{k: _tuples(v) for k, v in params.items()})
         fitted = d.get("fitted")
         if fitted is not None:
+            if not isinstance(fitted, dict):
+                raise InputError(f"{cls.__name__}.from_dict: `fitted` must be an object")
             missing = [name for name in cls._fitted if name not in fitted]
             if missing:
                 raise InputError(f"{cls.__name__}.from_dict: `fitted` lacks {', '.join(missing)}")
             model._decode_fitted(fitted)
+            model._check_loaded()
         return model
 
 
@@ -169,6 +188,40 @@ def check_X(X: Any, name: str = "X", n_features: int | None = None) -> np.ndarra
     if n_features is not None and X.shape[1] != n_features:
         raise InputError(f"`{name}` has {X.shape[1]} columns; the model was fitted on {n_features}")
     return X
+
+
+def finite_array(
+    owner: str, name: str, value: Any, ndim: int | None = None, empty_ok: bool = False
+) -> np.ndarray:
+    """`value` (nested JSON lists) as a non-empty, finite float64 array.
+
+    Raises
+    ------
+    InputError
+        Not numeric or ragged, empty, not finite (NaN, Infinity, 1e999), or
+        not `ndim`-dimensional; the message names `owner` and `name`.
+    """
+    if isinstance(value, (bool, str)) or _holds_bool_or_str(value):
+        raise InputError(f"{owner}: `{name}` must hold numbers, got {_short(value)}")
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{owner}: `{name}` is not a numeric array: {_short(value)}") from None
+    if array.size == 0 and not empty_ok:
+        raise InputError(f"{owner}: `{name}` is empty")
+    if ndim is not None and array.ndim != ndim:
+        raise InputError(f"{owner}: `{name}` must be {ndim}-D, got shape {array.shape}")
+    bad = np.argwhere(~np.isfinite(array))
+    if bad.size:
+        index = tuple(int(i) for i in bad[0])
+        raise InputError(f"{owner}: `{name}`{list(index)} is {array[index]}, not a finite number")
+    return array
+
+
+def check_shape(owner: str, name: str, array: np.ndarray, shape: tuple[int, ...]) -> None:
+    """Refuse a learned array whose shape is not the one its parameters imply."""
+    if array.shape != shape:
+        raise InputError(f"{owner}: `{name}` has shape {array.shape}; the parameters imply {shape}")
 
 
 def check_X_y(X: Any, y: Any, min_samples: int = 2) -> tuple[np.ndarray, np.ndarray]:
@@ -278,6 +331,18 @@ def _plain(value: Any, name: str) -> Any:
             raise ValueError(f"`{name}` holds {value}, which JSON cannot store")
         return value
     return value
+
+
+def _holds_bool_or_str(value: Any) -> bool:
+    """Whether nested lists hold a bool or a str (numpy would read True as 1.0)."""
+    if isinstance(value, (list, tuple)):
+        return any(_holds_bool_or_str(v) for v in value)
+    return isinstance(value, (bool, str))
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _tuples(value: Any) -> Any:

@@ -26,7 +26,9 @@ from gyrocomp.models._base import (
     check_float,
     check_int,
     check_seed,
+    check_shape,
     check_X_y,
+    finite_array,
     rmse,
 )
 
@@ -163,6 +165,7 @@ class ANFIS(Learner):
     _arrays = frozenset(
         {"input_offset_", "input_scale_", "consequents_", "train_rmse_", "val_rmse_", "step_sizes_"}
     )
+    _may_be_empty = frozenset({"val_rmse_"})
 
     def __init__(
         self,
@@ -283,7 +286,29 @@ class ANFIS(Learner):
 
     def _decode_fitted(self, fitted: dict[str, Any]) -> None:
         super()._decode_fitted(fitted)
-        self.premises_ = [np.asarray(p, dtype=np.float64) for p in fitted["premises_"]]
+        premises = fitted["premises_"]
+        if not isinstance(premises, list):
+            raise InputError(f"ANFIS: `premises_` must be a list, got {type(premises).__name__}")
+        self.premises_ = [finite_array("ANFIS", f"premises_[{j}]", p, ndim=2) for j, p in enumerate(premises)]
+        self.best_epoch_ = check_int("ANFIS", "best_epoch_", self.best_epoch_, 0)
+
+    def _check_loaded(self) -> None:
+        owner = "ANFIS"
+        n = self.n_features_in_
+        n_mfs = self._check_params(n)
+        width = 3 if self.mf == "gbell" else 2
+        if len(self.premises_) != n:
+            raise InputError(f"{owner}: `premises_` has {len(self.premises_)} inputs; `n_features_in_` is {n}")
+        for j, (p, m) in enumerate(zip(self.premises_, n_mfs)):
+            check_shape(owner, f"premises_[{j}]", p, (m, width))
+            spread = p[:, 0] if self.mf == "gbell" else p[:, 1]
+            if np.any(spread <= 0):
+                raise InputError(f"{owner}: `premises_[{j}]` has a membership width <= 0")
+        check_shape(owner, "consequents_", self.consequents_, (int(np.prod(n_mfs)), n + 1))
+        check_shape(owner, "input_offset_", self.input_offset_, (n,))
+        check_shape(owner, "input_scale_", self.input_scale_, (n,))
+        if np.any(self.input_scale_ <= 0):
+            raise InputError(f"{owner}: `input_scale_` must be > 0, got {self.input_scale_.tolist()}")
 
 
 def _initial_premises(m: int, mf: str) -> np.ndarray:

@@ -9,6 +9,7 @@ with L-BFGS.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -20,7 +21,9 @@ from gyrocomp.models._base import (
     check_float,
     check_int,
     check_seed,
+    check_shape,
     check_X_y,
+    finite_array,
 )
 
 __all__ = ["BPNetwork"]
@@ -170,6 +173,31 @@ class BPNetwork(Learner):
         check_seed(owner, self.seed)
 
     def _decode_fitted(self, fitted: dict[str, Any]) -> None:
+        owner = "BPNetwork"
         super()._decode_fitted(fitted)
-        self.coefs_ = [np.asarray(w, dtype=np.float64) for w in fitted["coefs_"]]
-        self.intercepts_ = [np.asarray(b, dtype=np.float64) for b in fitted["intercepts_"]]
+        for name, ndim in (("coefs_", 2), ("intercepts_", 1)):
+            layers = fitted[name]
+            if not isinstance(layers, list):
+                raise InputError(f"{owner}: `{name}` must be a list, got {type(layers).__name__}")
+            setattr(self, name, [finite_array(owner, f"{name}[{i}]", v, ndim) for i, v in enumerate(layers)])
+        self.y_mean_ = check_float(owner, "y_mean_", self.y_mean_, -math.inf)
+        self.y_scale_ = check_float(owner, "y_scale_", self.y_scale_, 0.0, low_open=True)
+        self.n_iter_ = check_int(owner, "n_iter_", self.n_iter_, 0)
+
+    def _check_loaded(self) -> None:
+        owner = "BPNetwork"
+        self._check_params()
+        n = self.n_features_in_
+        sizes = [n, *self.hidden_layer_sizes, 1]
+        if len(self.coefs_) != len(sizes) - 1 or len(self.intercepts_) != len(sizes) - 1:
+            raise InputError(
+                f"{owner}: {len(self.coefs_)} weight and {len(self.intercepts_)} bias layers; "
+                f"`hidden_layer_sizes` implies {len(sizes) - 1}"
+            )
+        for i, (w, b) in enumerate(zip(self.coefs_, self.intercepts_)):
+            check_shape(owner, f"coefs_[{i}]", w, (sizes[i], sizes[i + 1]))
+            check_shape(owner, f"intercepts_[{i}]", b, (sizes[i + 1],))
+        check_shape(owner, "x_mean_", self.x_mean_, (n,))
+        check_shape(owner, "x_scale_", self.x_scale_, (n,))
+        if np.any(self.x_scale_ <= 0):
+            raise InputError(f"{owner}: `x_scale_` must be > 0, got {self.x_scale_.tolist()}")

@@ -20,6 +20,7 @@ from gyrocomp.models._base import (
     check_float,
     check_int,
     check_seed,
+    check_shape,
     check_X_y,
 )
 
@@ -161,6 +162,16 @@ class ELM(Learner):
 
     def _hidden(self, X: np.ndarray) -> np.ndarray:
         return activation(self.activation)(X @ self.input_weights_ + self.biases_)
+
+    def _check_loaded(self) -> None:
+        self._check_params()
+        shapes = {
+            "input_weights_": (self.n_features_in_, self.n_hidden),
+            "biases_": (self.n_hidden,),
+            "beta_": (self.n_hidden,),
+        }
+        for name, shape in shapes.items():
+            check_shape("ELM", name, getattr(self, name), shape)
 
     def _check_params(self) -> None:
         check_int("ELM", "n_hidden", self.n_hidden, 1)

@@ -203,11 +203,26 @@ class NSGA2ELM(Learner):
         return encoded
 
     def _decode_fitted(self, fitted: dict[str, Any]) -> None:
-        self.n_features_in_ = int(fitted["n_features_in_"])
-        self.front_ = [dict(member) for member in fitted["front_"]]
-        self.best_index_ = int(fitted["best_index_"])
-        self.elm_seed_ = int(fitted["elm_seed_"])
+        owner = "NSGA2ELM"
+        self.n_features_in_ = check_int(owner, "n_features_in_", fitted["n_features_in_"], 1)
+        front = fitted["front_"]
+        if not isinstance(front, list) or not front or not all(isinstance(m, dict) for m in front):
+            raise InputError(f"{owner}: `front_` must be a non-empty list of members")
+        self.front_ = [dict(member) for member in front]
+        self.best_index_ = check_int(owner, "best_index_", fitted["best_index_"], 0, len(front) - 1)
+        self.elm_seed_ = check_seed(owner, fitted["elm_seed_"])
         self.estimator_ = ELM.from_dict(fitted["estimator_"])
+
+    def _check_loaded(self) -> None:
+        owner = "NSGA2ELM"
+        self._check_params()
+        if not self.estimator_._is_fitted():
+            raise InputError(f"{owner}: `estimator_` is not a fitted ELM")
+        if self.estimator_.n_features_in_ != self.n_features_in_:
+            raise InputError(
+                f"{owner}: `estimator_` takes {self.estimator_.n_features_in_} inputs; "
+                f"`n_features_in_` is {self.n_features_in_}"
+            )
 
 
 def _search(model: NSGA2ELM, objectives, seed: int) -> list[dict[str, Any]]:

@@ -9,12 +9,13 @@ dT/dt). It is the comparator every learned model has to beat.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from gyrocomp.errors import InputError
-from gyrocomp.models._base import Learner, check_float, check_int, check_X_y
+from gyrocomp.models._base import Learner, check_float, check_int, check_shape, check_X_y
 
 __all__ = ["PolynomialDrift"]
 
@@ -113,6 +114,14 @@ class PolynomialDrift(Learner):
         if self.rate_term:
             columns.append(X[:, 1])
         return np.column_stack(columns)
+
+    def _check_loaded(self) -> None:
+        owner = "PolynomialDrift"
+        self._check_params(self.n_features_in_)
+        check_shape(owner, "coef_", self.coef_, (self.degree + 1,))
+        self.rate_coef_ = check_float(owner, "rate_coef_", self.rate_coef_, -math.inf)
+        if not self.rate_term and self.rate_coef_ != 0.0:
+            raise InputError(f"{owner}: `rate_coef_` is {self.rate_coef_} but `rate_term` is false")
 
     def _check_params(self, n_features: int) -> None:
         owner = "PolynomialDrift"

@@ -34,7 +34,8 @@ from gyrocomp import io
 from gyrocomp.config import bind
 from gyrocomp.errors import InputError
 from gyrocomp.pipeline import rate as rate_estimator
-from gyrocomp.pipeline.settings import RateSettings
+from gyrocomp.models._base import check_choice, check_float, finite_array
+from gyrocomp.pipeline.settings import PIPELINE_KINDS, RateSettings
 from gyrocomp.pipeline.train import INPUTS, MODEL_SCHEMA, segments
 
 __all__ = [
@@ -122,19 +123,22 @@ def load_model(obj: dict, name: str = "model.json") -> DriftModel:
         rate = bind(RateSettings, rate_table, f"{name} rate_estimator")
         learners = {}
         for segment, entry in obj["segments"].items():
-            offset = np.asarray(entry["input_offset"], dtype=float)
-            scale = np.asarray(entry["input_scale"], dtype=float)
+            where = f"{name}: segment {segment}"
+            offset = finite_array(where, "input_offset", entry["input_offset"], ndim=1)
+            scale = finite_array(where, "input_scale", entry["input_scale"], ndim=1)
             if offset.shape != (len(INPUTS),) or scale.shape != (len(INPUTS),) or not np.all(scale > 0):
-                raise InputError(f"{name}: segment {segment} needs {len(INPUTS)} input offsets and positive scales")
+                raise InputError(f"{where} needs {len(INPUTS)} input offsets and positive scales")
             if not isinstance(entry["learner"], dict) or entry["learner"].get("fitted") is None:
-                raise InputError(f"{name}: segment {segment}: the learner holds no fitted parameters")
+                raise InputError(f"{where}: the learner holds no fitted parameters")
             learner = models.from_dict(entry["learner"])
-            y_range = (float(entry["output_min"]), float(entry["output_max"]))
-            learners[segment] = (learner, offset, scale, float(entry["output_offset"]), float(entry["output_scale"]), y_range)
+            y_offset = check_float(where, "output_offset", entry["output_offset"], -np.inf)
+            y_scale = check_float(where, "output_scale", entry["output_scale"], 0.0, low_open=True)
+            y_range = _finite_range(where, "output_min/output_max", entry["output_min"], entry["output_max"])
+            learners[segment] = (learner, offset, scale, y_offset, y_scale, y_range)
         for key in ("temperature_c", "temperature_rate_c_per_s"):
-            float(obj["training"][key]["min"]), float(obj["training"][key]["max"])
-        kind, parallel = str(obj["kind"]), bool(obj["parallel"])
-        clips = bool(obj["clip_inputs"]), bool(obj["clip_output"])
+            _finite_range(f"{name}: training", key, obj["training"][key]["min"], obj["training"][key]["max"])
+        kind = check_choice(name, "kind", obj["kind"], PIPELINE_KINDS)
+        parallel, *clips = (_flag(name, key, obj[key]) for key in ("parallel", "clip_inputs", "clip_output"))
     except InputError:
         raise
     except (KeyError, TypeError, ValueError, IndexError, AttributeError) as err:
@@ -164,6 +168,20 @@ def clamp_inputs(X: np.ndarray, model: DriftModel) -> np.ndarray:
     """
     (t_lo, t_hi), (r_lo, r_hi) = model.temperature_range_c, model.rate_range_c_per_s
     return np.clip(X, [t_lo, r_lo], [t_hi, r_hi])
+
+
+def _finite_range(where: str, what: str, low, high) -> tuple[float, float]:
+    """(low, high) as finite floats with low <= high."""
+    low = check_float(where, f"{what} min", low, -np.inf)
+    high = check_float(where, f"{what} max", high, low)
+    return low, high
+
+
+def _flag(name: str, key: str, value) -> bool:
+    """A JSON boolean; a string such as ``"no"`` is refused, not read as true."""
+    if not isinstance(value, bool):
+        raise InputError(f"{name}: `{key}` must be true or false, got {value!r}")
+    return value
 
 
 def compensate(

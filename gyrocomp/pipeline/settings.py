@@ -45,8 +45,14 @@ LEARNERS = {
 }
 """Learner names usable in ``[model.<segment>] learner = ...`` and their classes in :mod:`gyrocomp.models`."""
 
+PIPELINE_KINDS = ("pe-lcd-anfis", "iceemdan-se-tfpf-nsga2elm", "polynomial", "bp", "elm", "anfis", "nsga2elm")
+"""Pipeline labels ``[pipeline] kind`` may take: the two papers' pipelines and the direct comparators."""
+
 SEGMENTS = ("drift", "mixed")
 """Segments that can carry a learner; a direct pipeline models the whole rate as ``drift``."""
+
+MODEL_KEYS = ("clip_inputs", "clip_output", "max_samples", "min_temperature_span_c", "min_temperature_rate_span_c_per_s")
+"""Keys of the ``[model]`` table beside its segments."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,7 +62,8 @@ class PipelineSettings:
     Parameters
     ----------
     kind : str
-        Label of the pipeline in reports and in ``model.json``.
+        Label of the pipeline in reports and in ``model.json``, one of
+        :data:`PIPELINE_KINDS`.
     parallel : bool
         True: the papers' parallel processing (decompose, classify, denoise
         each class, one learner per segment). False: a direct comparator
@@ -68,8 +75,10 @@ class PipelineSettings:
     parallel: bool = False
 
     def __post_init__(self):
-        if not self.kind:
-            raise InputError("[pipeline] `kind` is empty")
+        if self.kind not in PIPELINE_KINDS:
+            raise InputError(f"[pipeline] kind = {self.kind!r}; known: {', '.join(PIPELINE_KINDS)}")
+        if not isinstance(self.parallel, bool):
+            raise InputError(f"[pipeline] parallel = {self.parallel!r} must be true or false")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -148,15 +157,32 @@ class ModelSettings:
         means of consecutive blocks of ``ceil(n / max_samples)`` samples
         (inputs and targets alike; the drift varies over minutes, the
         blocks last seconds). 0 trains on every sample.
+    min_temperature_span_c : float
+        Refuse to train when the training temperature spans less [degC]: a
+        run that never left one temperature has no drift to learn, and the
+        powers of (T - T_ref) and dT/dt (round-off about zero) make the
+        least-squares problem rank-deficient (a polynomial fitted on a
+        constant-temperature run had a dT/dt coefficient of -4.9e15).
+    min_temperature_rate_span_c_per_s : float
+        Likewise for the spread of dT/dt [degC/s]: a run that only ramped at
+        one rate cannot tell a dT/dt sensitivity from the offset.
     """
 
     segments: dict
     clip_inputs: bool = True
     clip_output: bool = True
     max_samples: int = 2000
+    min_temperature_span_c: float = 2.0
+    min_temperature_rate_span_c_per_s: float = 1e-4
 
     def to_dict(self) -> dict:
-        head = {"clip_inputs": self.clip_inputs, "clip_output": self.clip_output, "max_samples": self.max_samples}
+        head = {
+            "clip_inputs": self.clip_inputs,
+            "clip_output": self.clip_output,
+            "max_samples": self.max_samples,
+            "min_temperature_span_c": self.min_temperature_span_c,
+            "min_temperature_rate_span_c_per_s": self.min_temperature_rate_span_c_per_s,
+        }
         return {**head, **{name: spec.to_dict() for name, spec in self.segments.items()}}
 
 
@@ -189,11 +215,15 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
     max_samples = table.pop("max_samples", 2000)
     if isinstance(max_samples, bool) or not isinstance(max_samples, int) or max_samples < 0:
         raise InputError(f"{source} [model]: max_samples = {max_samples!r} should be an integer >= 0")
+    spans = {key: table.pop(key, default) for key, default in (("min_temperature_span_c", 2.0), ("min_temperature_rate_span_c_per_s", 1e-4))}
+    for key, value in spans.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
+            raise InputError(f"{source} [model]: {key} = {value!r} should be a finite number >= 0")
     allowed = SEGMENTS if parallel else ("drift",)
     unknown = sorted(set(table) - set(allowed))
     if unknown:
         raise InputError(
-            f"{source} [model]: unknown segment or key {', '.join(unknown)}; known: clip_inputs, clip_output, max_samples, {', '.join(allowed)}"
+            f"{source} [model]: unknown segment or key {', '.join(unknown)}; known: {', '.join(MODEL_KEYS)}, {', '.join(allowed)}"
         )
     segments = {}
     for segment in allowed:
@@ -209,7 +239,7 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
         if bad:
             raise InputError(f"{where}: unknown setting {', '.join(bad)} for {name}; known: {', '.join(known)}")
         segments[segment] = LearnerSpec(learner=name, params=entry)
-    return ModelSettings(segments=segments, max_samples=max_samples, **clips)
+    return ModelSettings(segments=segments, max_samples=max_samples, **clips, **spans)
 
 
 def learner_class(name: str) -> type:

@@ -211,6 +211,7 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
     model_table = model_settings(config, source, parallel=pipeline.parallel)
     X = rate_estimator.model_inputs(temperature, fs_hz, rate_cfg)
     lo, hi = X.min(axis=0), X.max(axis=0)
+    _check_rank(lo, hi, model_table, ", ".join(record["name"] for record in inputs) or source)
     fitted = {}
     for segment, y in targets.items():
         spec = model_table.segments[segment]
@@ -261,6 +262,20 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
     if extra.get("training_classes") is not None:
         body["training"]["classes"] = extra["training_classes"]
     return {**header, **body}
+
+
+def _check_rank(lo: np.ndarray, hi: np.ndarray, model_table, name: str) -> None:
+    """Refuse inputs that leave the drift model rank-deficient (see :class:`ModelSettings`)."""
+    limits = (
+        ("temperature", "degC", model_table.min_temperature_span_c, "min_temperature_span_c"),
+        ("temperature rate", "degC/s", model_table.min_temperature_rate_span_c_per_s, "min_temperature_rate_span_c_per_s"),
+    )
+    for (what, unit, limit, key), low, high in zip(limits, lo, hi):
+        if high - low < limit:
+            raise InputError(
+                f"{name}: the training {what} spans only {high - low:.3g} {unit} ({low:.6g} to {high:.6g}); "
+                f"a drift model needs at least {limit:g} ([model] {key}): train on a run that heats and cools"
+            )
 
 
 def _block_means(X: np.ndarray, y: np.ndarray, max_samples: int) -> tuple[np.ndarray, np.ndarray]:
