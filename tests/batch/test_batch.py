@@ -101,8 +101,7 @@ def test_killed_batch_resumes_without_redoing_finished_inputs(logs, tmp_path):
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
-    deadline = time.monotonic() + 120
-    while not list(out.glob(f"*/{MANIFEST}")) and time.monotonic() < deadline and proc.poll() is None:
+    while not list(out.glob(f"*/{MANIFEST}")) and proc.poll() is None:  # no wall-clock bound: a loaded CPU only slows it
         time.sleep(0.02)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
@@ -118,6 +117,7 @@ def test_killed_batch_resumes_without_redoing_finished_inputs(logs, tmp_path):
 
 
 def test_one_and_two_workers_give_identical_bytes(logs, tmp_path):
+    # Exact within one machine: the workers run the same build on the same CPU as this process.
     pattern = [str(logs / "unit*.parquet")]
     one = run_batch("allan", pattern, tmp_path / "one", workers=1)
     two = run_batch("allan", pattern, tmp_path / "two", workers=2)
@@ -126,6 +126,7 @@ def test_one_and_two_workers_give_identical_bytes(logs, tmp_path):
 
 
 def test_dask_cluster_gives_the_local_bytes(logs, tmp_path):
+    # Exact within one machine (an in-process cluster); a cluster of other CPUs may differ in the last bits.
     distributed = pytest.importorskip("dask.distributed")
     pattern = [str(logs / "unit[012].parquet")]
     run_batch("allan", pattern, tmp_path / "local", workers=1)

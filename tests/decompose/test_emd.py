@@ -30,7 +30,10 @@ def test_plateau_is_one_extremum_at_its_middle():
 
 
 def test_rows_of_a_batch_do_not_mix():
-    """A row sifted alone or in a batch gives the same bytes (the basis of worker-independence)."""
+    """A row sifted alone or in a batch gives the same bytes (the basis of worker-independence).
+
+    Both sifts run in this process: exact bytes hold within one machine and one process type.
+    """
     rng = np.random.default_rng(3)
     rows = rng.standard_normal((4, 700))
     batch = E.sift(rows)

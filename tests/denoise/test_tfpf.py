@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -36,13 +34,6 @@ def test_constant_and_offset_scale_invariance():
     assert_allclose(tfpf(np.full(100, 3.5), 11), 3.5)
     x = np.random.default_rng(1).standard_normal(500)
     assert_allclose(tfpf(10 * x + 4, 21), 10 * tfpf(x, 21) + 4, rtol=1e-9, atol=1e-9)
-
-
-def test_fast_on_1e5_samples():
-    x = np.random.default_rng(2).standard_normal(100_000)
-    t0 = time.perf_counter()
-    tfpf(x, 101)
-    assert time.perf_counter() - t0 < 30  # seconds; ~1-4 s here (shared CPU)
 
 
 @pytest.mark.parametrize(

@@ -50,6 +50,7 @@ def test_json_round_trip_predicts_identically(model, X):
 
 @pytest.mark.parametrize("model, X", CASES, ids=IDS)
 def test_same_seed_same_predictions(model, X):
+    # Both fits run in this process: exact within one machine and one process type.
     a = type(model)(**model.get_params()).fit(X, Y)
     b = type(model)(**model.get_params()).fit(X, Y)
     assert np.array_equal(a.predict(X), b.predict(X))

@@ -75,6 +75,7 @@ def test_retrained_on_its_own_compensated_run_learns_nothing(key, trained, oven_
 
 
 def test_model_json_is_plain_reproducible_and_round_trips(trained, oven_pair):
+    """Same seed, same bytes: exact within one machine and one process type (both fits run here)."""
     train, test, *_ = oven_pair
     again = train_direct(train, _config("elm"), source="elm", seed=0)
     assert json.dumps(again, sort_keys=True) == json.dumps(trained["elm"], sort_keys=True)

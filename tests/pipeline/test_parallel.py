@@ -126,7 +126,10 @@ def test_compensate_cli_warns_out_of_range_on_stderr(make_recording, tmp_path, o
 
 
 def test_pipeline_writes_the_cli_artefacts_byte_for_byte(tmp_path, oven_files):
-    """`run`'s decompose and classify stage and the two commands share one writer per artefact."""
+    """`run`'s decompose and classify stage and the two commands share one writer per artefact.
+
+    Both runs are in this process: exact bytes hold within one machine and one process type.
+    """
     from gyrocomp.config import load_config
     from gyrocomp.commands.run import decompose_and_classify
 

@@ -16,6 +16,7 @@ def _invoke(*args):
 
 
 def test_same_seed_same_bytes_different_seed_different_noise_same_truth(tmp_path):
+    # Both runs are in this process: exact bytes hold within one machine and one process type.
     paths = [tmp_path / name for name in ("a.parquet", "b.parquet", "c.parquet")]
     for path, seed in zip(paths, (4, 4, 5)):
         result = _invoke(*SHORT, "--seed", str(seed), "--truth-columns", "--out", str(path))
