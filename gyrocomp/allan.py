@@ -709,22 +709,31 @@ def _nnls_subsets(a: np.ndarray, b: np.ndarray):
 def _add_readoffs(terms: dict, tau: np.ndarray, adev: np.ndarray, settings: AllanConfig) -> None:
     """Classic IEEE 952 read-offs: N on the -1/2 line at 1 s, K on the +1/2 line at 3 s, B = minimum / 0.664.
 
-    A line is the longest run of consecutive log-log segments whose slope is
-    within `slope_tolerance` of -1/2 (+1/2); its level is the geometric mean
-    of sigma * tau^(-slope) over the run. B uses the first local minimum of
-    the curve (the flicker floor before rate random walk or drift lifts it),
-    the last point when the curve only falls.
+    B uses the first local minimum of the curve (the flicker floor before
+    rate random walk or drift lifts it), the last point when the curve only
+    falls. Each line is read in its own tau range, the way the terms appear
+    on an Allan curve: the -1/2 line (angle random walk) at or below that
+    minimum, the +1/2 line (rate random walk) at or above it. A line is the
+    longest run there of consecutive log-log segments whose slope is within
+    `slope_tolerance` of -1/2 (+1/2); its level is the geometric mean of
+    sigma * tau^(-slope) over the run. Without a run the read-off is
+    ``None`` and ``readoff_note`` says so: a denoised recording, whose curve
+    rises first and falls as tau^(-1/2) only at thousands of seconds, has no
+    angle random walk to read, though a -1/2 stretch exists far above 1 s.
     """
-    for key, slope, at in (("arw", -0.5, settings.arw_tau_s), ("rrw", 0.5, settings.rrw_tau_s)):
-        run = _longest_run(tau, adev, slope, settings.slope_tolerance)
-        factor = _TERMS[key][2]
-        if run is None:
-            terms[key].update(readoff=None, readoff_tau_s=None)
-            continue
-        level = np.exp(np.mean(np.log(adev[run]) - slope * np.log(tau[run])))
-        terms[key].update(readoff=float(level * at**slope * factor), readoff_tau_s=[float(tau[run[0]]), float(tau[run[-1]])])
     rising = np.flatnonzero(np.diff(adev) > 0)
     i = int(rising[0]) if rising.size else len(adev) - 1
+    ranges = {"arw": (-0.5, settings.arw_tau_s, slice(0, i + 1), "at or below"), "rrw": (0.5, settings.rrw_tau_s, slice(i, len(tau)), "at or above")}
+    for key, (slope, at, window, where) in ranges.items():
+        run = _longest_run(tau[window], adev[window], slope, settings.slope_tolerance)
+        factor = _TERMS[key][2]
+        if run is None:
+            note = f"no {slope:+.1f} slope {where} the Allan minimum (tau = {tau[i]:.3g} s)"
+            terms[key].update(readoff=None, readoff_tau_s=None, readoff_note=note)
+            continue
+        run = run + window.start
+        level = np.exp(np.mean(np.log(adev[run]) - slope * np.log(tau[run])))
+        terms[key].update(readoff=float(level * at**slope * factor), readoff_tau_s=[float(tau[run[0]]), float(tau[run[-1]])])
     terms["bias_instability"].update(
         readoff=float(adev[i] / settings.bias_factor * _TERMS["bias_instability"][2]),
         readoff_tau_s=float(tau[i]),

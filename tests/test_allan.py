@@ -333,3 +333,23 @@ def test_streamed_lag1_equals_whole_array(d):
     mean = phase[-1] / n
     slope = np.dot(np.arange(n) - center, np.diff(phase)) / (n * (n * n - 1.0) / 12.0)
     assert_allclose(al._lag1_delta(phase, 1, n, mean, slope, center, d), r1 / (1.0 + r1), rtol=1e-9)
+
+
+def test_arw_readoff_only_below_the_allan_minimum():
+    """Issue 18: a smoothed (denoised) recording has no -1/2 line at short tau; the far -1/2 stretch is not ARW.
+
+    A 2000-sample moving mean of white noise rises as tau^1 up to ~2000 s and
+    falls as tau^(-1/2) beyond: before the fix the read-off took that far
+    stretch and reported an ARW the recording does not have.
+    """
+    from gyrocomp.allan import analyse
+
+    rng = np.random.default_rng(18)
+    smooth = np.convolve(rng.normal(0.0, 0.01, 400_000), np.ones(2000) / 2000, mode="valid")
+    series = analyse(smooth, 1.0)
+    arw = series.terms["arw"]
+    assert arw["readoff"] is None
+    assert "no -0.5 slope at or below the Allan minimum" in arw["readoff_note"]
+    # white noise keeps its read-off, on the short-tau line
+    white = analyse(rng.normal(0.0, 0.01, 100_000), 1.0).terms["arw"]
+    assert white["readoff"] == pytest.approx(0.01 * 60, rel=0.05) and white["readoff_tau_s"][0] == 1.0

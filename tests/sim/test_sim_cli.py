@@ -65,7 +65,7 @@ def test_profile_by_name_and_by_recording_and_csv_output(tmp_path):
     result = _invoke("--profile", str(driver), "--truth-columns", "--out", str(out))
     assert result.exit_code == 0, result.output
     rec = io.read_recording(out)
-    assert np.allclose(rec.data.truth_temperature, frame.temperature)
+    assert np.allclose(rec.data.truth_temperature, frame.temperature, rtol=0, atol=0.2)  # the housing: the reading smoothed over 60 s
     assert rec.metadata["inputs"][0]["name"] == "driver.csv"
 
 
