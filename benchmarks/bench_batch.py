@@ -31,7 +31,7 @@ HERE = Path(__file__).resolve().parent
 
 
 def main() -> dict:
-    from gyrocomp import io, sim
+    from gyrocomp import artefacts, sim
     from gyrocomp.batch import run_batch
     from gyrocomp.batch.jobs import JOBS
 
@@ -42,7 +42,7 @@ def main() -> dict:
         logs.mkdir()
         for seed in range(N_LOGS):
             frame, _ = sim.simulate(cfg.gyro, cfg.profile, fs_hz=2.0, seed=seed, duration_s=7200.0)
-            io.write_table(logs / f"log{seed:02d}.parquet", frame[["time", "rate", "temperature"]], {})
+            artefacts.write_table(logs / f"log{seed:02d}.parquet", frame[["time", "rate", "temperature"]], {})
         paths = sorted(str(p) for p in logs.glob("*.parquet"))
         job = JOBS["allan"]
         settings = job.resolve(dict(job.options), {})
@@ -95,11 +95,12 @@ def main() -> dict:
 
 def _machinery(paths, direct: Path, settings: dict) -> float:
     """Seconds of what a batch adds around the stage, timed alone: hash, check, manifest, rename."""
+    from gyrocomp import artefacts
     from gyrocomp.batch import manifest as mf
 
     t0 = time.perf_counter()
     for i, p in enumerate(paths):
-        sha = mf.file_sha256(p)
+        sha = artefacts.file_sha256(p)
         mf.is_up_to_date(direct / f"m{i}", "allan", sha, settings)
         tmp = mf.new_folder(direct, f"m{i}")
         for name in ("allan.json", "allan.png"):

@@ -24,7 +24,7 @@ ROOT = HERE.parent
 
 
 def main(quick: bool) -> dict:
-    from gyrocomp import io
+    from gyrocomp import artefacts, recordings
     from gyrocomp.commands import run as run_command
 
     train = ROOT / "sample_data" / "oven_train.parquet"
@@ -33,9 +33,9 @@ def main(quick: bool) -> dict:
         if quick:
             paths = []
             for path in (train, test):
-                rec = io.read_recording(path)
+                rec = recordings.read_recording(path)
                 paths.append(Path(folder) / path.name)
-                io.write_table(paths[-1], rec.data.iloc[:10800], {})
+                artefacts.write_table(paths[-1], rec.data.iloc[:10800], {})
             train, test = paths
         start = time.perf_counter()
         options = run_command.Options(test=test, workers=2)

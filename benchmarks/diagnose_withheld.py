@@ -151,7 +151,7 @@ def _gyro(case):
 def simulate_pair(case, truth_columns=False):
     """Two recordings (fit, holdout) of the case's gyro, and the fit run's frame."""
     from gyrocomp.config import bind, load_config
-    from gyrocomp.io import recording_from_frame
+    from gyrocomp.recordings import recording_from_frame
     from gyrocomp.sim.profile import ProfileSettings
     from gyrocomp.sim.simulate import simulate
 

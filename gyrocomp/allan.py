@@ -298,7 +298,7 @@ def analyse(
 
 def allan_artefact(series: Sequence[AllanSeries], *, inputs: list[dict], settings: dict) -> dict:
     """The ``allan.json`` artefact: header (schema ``gyrocomp.allan``) and ``series``."""
-    from gyrocomp.io import artefact_header
+    from gyrocomp.artefacts import artefact_header
 
     header = artefact_header("gyrocomp.allan", inputs=inputs, settings=settings)
     return {**header, "series": [s.to_dict() for s in series]}
@@ -343,7 +343,7 @@ def plot_allan(series: Sequence[AllanSeries], path: str | os.PathLike, *, unit: 
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    from gyrocomp.io import atomic_path
+    from gyrocomp.artefacts import atomic_path
 
     fig = Figure(figsize=(7.5, 5.0), dpi=120)
     ax = fig.add_subplot()

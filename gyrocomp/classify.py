@@ -176,7 +176,7 @@ def plot_entropies(entries: Sequence[dict], settings: ClassifySettings, path: st
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from gyrocomp import io
+    from gyrocomp import artefacts
 
     colours = {"noise": "tab:red", "mixed": "tab:orange", "drift": "tab:blue"}
     values = np.array([e["entropy"] for e in entries], dtype=float)
@@ -191,6 +191,6 @@ def plot_entropies(entries: Sequence[dict], settings: ClassifySettings, path: st
     ax.set_xlabel("component")
     ax.tick_params(axis="x", labelrotation=45)
     ax.legend(loc="upper right", fontsize="small")
-    with io.atomic_path(path) as tmp:
+    with artefacts.atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=120, metadata={"Software": None})
     plt.close(fig)

@@ -245,26 +245,27 @@ def test_plot_writes_png(tmp_path):
 
 @pytest.mark.parametrize("kind", ["csv", "parquet"])
 def test_read_recording_usecols_loads_only_those_columns(tmp_path, kind):
-    from gyrocomp import io
+    from gyrocomp import recordings
 
     t = np.arange(50) / 10.0
     frame = pd.DataFrame({"t": t, "w": np.sin(t), "temperature": 25.0 + t, "other": np.cos(t)})
     path = tmp_path / f"rec.{kind}"
     frame.to_csv(path, index=False) if kind == "csv" else frame.to_parquet(path)
-    spec = io.ColumnSpec(time="t", rate="w")
-    full = io.read_recording(path, spec)
-    some = io.read_recording(path, spec, usecols=["t", "w"])
-    assert list(full.data.columns) == ["time", "rate", "temperature", "other"]
-    assert list(some.data.columns) == ["time", "rate"]
-    for col in ("time", "rate"):
+    spec = recordings.ColumnSpec(time="t", rate="w")
+    full = recordings.read_recording(path, spec)
+    some = recordings.read_recording(path, spec, usecols=["t", "w"])
+    assert list(full.data.columns) == ["time", "w", "temperature", "other"]  # an axis keeps its name
+    assert list(full.axis().data.columns) == ["time", "rate", "temperature", "other"]
+    assert list(some.data.columns) == ["time", "w"]
+    for col in ("time", "w"):
         np.testing.assert_array_equal(some.data[col], full.data[col])
     assert (some.fs_hz, some.sha256) == (full.fs_hz, full.sha256)
     # a missing column is reported with every column the file has, as without usecols
-    bad = io.ColumnSpec(time="t", rate="rate")
+    bad = recordings.ColumnSpec(time="t", rate="rate")
     with pytest.raises(InputError) as without:
-        io.read_recording(path, bad)
+        recordings.read_recording(path, bad)
     with pytest.raises(InputError) as with_usecols:
-        io.read_recording(path, bad, usecols=["t", "rate"])
+        recordings.read_recording(path, bad, usecols=["t", "rate"])
     assert str(with_usecols.value) == str(without.value)
     assert "'other'" in str(with_usecols.value)
 
@@ -274,16 +275,17 @@ def test_parquet_recording_equals_pandas_reading(tmp_path, with_nulls):
     """The row-group-wise Parquet -> NumPy path gives what ``to_pandas`` gave: index, ints, nulls."""
     import pyarrow.parquet as pq
 
-    from gyrocomp import io
+    from gyrocomp import recordings
 
     t = np.arange(40) / 4.0
     aux = np.where(t > 5, np.nan, t) if with_nulls else t**2  # NaN is stored as a null, in later row groups
     frame = pd.DataFrame({"time": t, "rate": np.arange(40), "aux": aux}, index=np.arange(40) + 7)
     path = tmp_path / "rec.parquet"
     frame.to_parquet(path, row_group_size=7)
-    assert (io._parquet_frame(pq.ParquetFile(path), None) is None) == with_nulls  # which path is tested
-    rec = io.read_recording(path)
-    expected = io.recording_from_frame(pd.read_parquet(path), sha256=rec.sha256, name=rec.name)
+    parquet = pq.ParquetFile(path)
+    assert (recordings._parquet_arrays(parquet, parquet.schema_arrow.names) is None) == with_nulls  # which path is tested
+    rec = recordings.read_recording(path)
+    expected = recordings.recording_from_frame(pd.read_parquet(path), sha256=rec.sha256, name=rec.name)
     pd.testing.assert_frame_equal(rec.data, expected.data)
     assert list(rec.data.columns) == (["time", "rate"] if with_nulls else ["time", "rate", "aux"])
     np.testing.assert_array_equal(rec.column("time"), t)

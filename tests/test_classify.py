@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from gyrocomp import io
+from gyrocomp import artefacts
 from gyrocomp.classify import ClassifySettings, PermutationSettings, SampleSettings, class_of, classify
 from gyrocomp.cli import app
 from gyrocomp.config import bind, load_config
@@ -78,9 +78,9 @@ def _write_components(path, schema="gyrocomp.components"):
     frame = pd.DataFrame({"time": np.arange(comps.shape[1]) / 10.0, "rate": comps.sum(axis=0)})
     for name, c in zip(names, comps):
         frame[name] = c
-    header = io.artefact_header(schema, inputs=[{"name": "rec.csv", "sha256": "0" * 64}])
+    header = artefacts.artefact_header(schema, inputs=[{"name": "rec.csv", "sha256": "0" * 64}])
     header["components"] = names
-    io.write_table(path, frame, header)
+    artefacts.write_table(path, frame, header)
 
 
 def test_cli_round_trip(tmp_path):
@@ -89,7 +89,7 @@ def test_cli_round_trip(tmp_path):
     out, png = tmp_path / "classes.json", tmp_path / "entropy.png"
     res = CliRunner().invoke(app, ["classify", str(comp), "--config", "iceemdan-se-tfpf-nsga2elm", "--plot", str(png), "--out", str(out)])
     assert res.exit_code == 0, res.output
-    doc = io.read_json(out, "gyrocomp.classes")
+    doc = artefacts.read_json(out, "gyrocomp.classes")
     assert [c["class"] for c in doc["components"]] == ["noise", "mixed", "drift"]
     assert doc["entropy"]["kind"] == "sample" and doc["thresholds"] == {"noise_above": 0.6, "drift_below": 0.1}
     assert doc["settings"]["sample"]["m"] == 2

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gyrocomp import io
+from gyrocomp import artefacts, recordings
 from gyrocomp.errors import InputError, SchemaError
 
 
@@ -46,8 +46,8 @@ def test_valid_tables_round_trip_exactly(tmp_path, n, fs, seed, kind):
         }
     )
     path = tmp_path / f"rec_{seed}_{n}.{kind}"
-    io.write_table(path, frame, io.artefact_header("gyrocomp.recording"))
-    rec = io.read_recording(path, require_temperature=True)
+    artefacts.write_table(path, frame, artefacts.artefact_header("gyrocomp.recording"))
+    rec = recordings.read_recording(path, require_temperature=True)
     pd.testing.assert_frame_equal(rec.data, frame, check_exact=True)
     assert rec.fs_hz == pytest.approx(fs, rel=1e-9)
 
@@ -57,7 +57,7 @@ def test_sha256_is_of_the_file_bytes(tmp_path):
 
     path = tmp_path / "r.csv"
     _frame().to_csv(path, index=False)
-    rec = io.read_recording(path)
+    rec = recordings.read_recording(path)
     assert rec.sha256 == hashlib.sha256(path.read_bytes()).hexdigest()
     assert rec.input_record() == {"name": "r.csv", "sha256": rec.sha256}
 
@@ -82,7 +82,7 @@ def test_sha256_is_of_the_file_bytes(tmp_path):
 def test_bad_csv_is_rejected_naming_line_and_column(tmp_path, text, expected):
     path = _write_csv(tmp_path, text)
     with pytest.raises(InputError) as info:
-        io.read_recording(path, require_temperature=True)
+        recordings.read_recording(path, require_temperature=True)
     message = str(info.value)
     assert message.startswith(str(path))
     assert expected in message
@@ -91,35 +91,35 @@ def test_bad_csv_is_rejected_naming_line_and_column(tmp_path, text, expected):
 
 def test_missing_file_and_unknown_extension(tmp_path):
     with pytest.raises(InputError, match="no such file"):
-        io.read_recording(tmp_path / "absent.csv")
+        recordings.read_recording(tmp_path / "absent.csv")
     path = tmp_path / "rec.xlsx"
     path.write_bytes(b"x")
     with pytest.raises(InputError, match="unknown extension '.xlsx'"):
-        io.read_recording(path)
+        recordings.read_recording(path)
 
 
 def test_too_few_samples(tmp_path):
     path = _write_csv(tmp_path, "time,rate\n0,1\n1,1\n2,1\n")
     with pytest.raises(InputError, match="3 samples, this command needs at least 10"):
-        io.read_recording(path, min_samples=10)
+        recordings.read_recording(path, min_samples=10)
 
 
 def test_corrupted_parquet_is_rejected(tmp_path):
     good = tmp_path / "good.parquet"
-    io.write_table(good, _frame(), io.artefact_header("gyrocomp.recording"))
+    artefacts.write_table(good, _frame(), artefacts.artefact_header("gyrocomp.recording"))
     bad = tmp_path / "bad.parquet"
     bad.write_bytes(good.read_bytes()[: len(good.read_bytes()) // 2])
     with pytest.raises(InputError, match="bad.parquet: not a readable Parquet file"):
-        io.read_recording(bad)
+        recordings.read_recording(bad)
 
 
 def test_parquet_nan_names_row(tmp_path):
     frame = _frame()
     frame.loc[7, "rate"] = np.nan
     path = tmp_path / "r.parquet"
-    io.write_table(path, frame, io.artefact_header("gyrocomp.recording"))
+    artefacts.write_table(path, frame, artefacts.artefact_header("gyrocomp.recording"))
     with pytest.raises(InputError, match=r"r.parquet row 8: `rate` is missing or NaN"):
-        io.read_recording(path)
+        recordings.read_recording(path)
 
 
 def test_column_mapping_and_units(tmp_path):
@@ -133,31 +133,31 @@ def test_column_mapping_and_units(tmp_path):
     )
     path = tmp_path / "r.csv"
     frame.to_csv(path, index=False)
-    spec = io.ColumnSpec(time="t_ms", rate="gz", temperature="temp_k", time_unit="ms", rate_unit="deg/h", temperature_unit="K")
-    rec = io.read_recording(path, spec, require_temperature=True)
+    spec = recordings.ColumnSpec(time="t_ms", rate="gz", temperature="temp_k", time_unit="ms", rate_unit="deg/h", temperature_unit="K")
+    rec = recordings.read_recording(path, spec, require_temperature=True)
     assert rec.fs_hz == pytest.approx(100.0)
     np.testing.assert_allclose(rec.rate_dps, 1.0)
     np.testing.assert_allclose(rec.temperature_c, 25.0)
     frame_rad = pd.DataFrame({"time": np.arange(4.0), "rate": np.full(4, np.pi)})
-    rec = io.recording_from_frame(frame_rad, columns=io.ColumnSpec(rate_unit="rad/s"))
+    rec = recordings.recording_from_frame(frame_rad, columns=recordings.ColumnSpec(rate_unit="rad/s"))
     np.testing.assert_allclose(rec.rate_dps, 180.0)
 
 
 def test_unknown_unit_is_refused():
     with pytest.raises(InputError, match="unknown rate unit 'deg/min'"):
-        io.ColumnSpec(rate_unit="deg/min")
+        recordings.ColumnSpec(rate_unit="deg/min")
 
 
 def test_kelvin_given_as_celsius_is_refused(tmp_path):
     path = _write_csv(tmp_path, "time,rate,temperature\n0,1,298\n1,1,298\n")
     with pytest.raises(InputError, match="wrong unit"):
-        io.read_recording(path)
+        recordings.read_recording(path)
 
 
 def test_resample_fixes_jitter(tmp_path):
     t = np.array([0.0, 1.0, 2.0, 3.7, 4.0, 5.0])
     frame = pd.DataFrame({"time": t, "rate": 2 * t})
-    rec = io.recording_from_frame(frame, resample=True)
+    rec = recordings.recording_from_frame(frame, resample=True)
     np.testing.assert_allclose(rec.time_s, np.arange(6.0))
     np.testing.assert_allclose(rec.rate_dps, 2 * np.arange(6.0))
 
@@ -165,7 +165,7 @@ def test_resample_fixes_jitter(tmp_path):
 def test_atomic_write_leaves_nothing_on_failure(tmp_path):
     target = tmp_path / "sub" / "out.json"
     with pytest.raises(RuntimeError):
-        with io.atomic_path(target) as tmp:
+        with artefacts.atomic_path(target) as tmp:
             Path(tmp).write_text("half")
             raise RuntimeError("interrupted")
     assert not target.exists()
@@ -174,24 +174,24 @@ def test_atomic_write_leaves_nothing_on_failure(tmp_path):
 
 def test_written_files_get_ordinary_permissions(tmp_path):
     target = tmp_path / "out.json"
-    io.write_json(target, {"a": 1})
-    assert target.stat().st_mode & 0o777 == 0o666 & ~io._umask()
+    artefacts.write_json(target, {"a": 1})
+    assert target.stat().st_mode & 0o777 == 0o666 & ~artefacts._umask()
 
 
 def test_atomic_write_keeps_previous_file_on_failure(tmp_path):
     target = tmp_path / "out.json"
-    io.write_json(target, {"a": 1})
+    artefacts.write_json(target, {"a": 1})
     with pytest.raises(TypeError):
-        io.write_json(target, {"a": object()})
+        artefacts.write_json(target, {"a": object()})
     assert json.loads(target.read_text()) == {"a": 1}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.json"]
 
 
 def test_json_is_deterministic_and_has_no_nan(tmp_path):
-    header = io.artefact_header("gyrocomp.test", settings={"x": np.float64(np.nan), "y": np.arange(3)}, seed=3)
+    header = artefacts.artefact_header("gyrocomp.test", settings={"x": np.float64(np.nan), "y": np.arange(3)}, seed=3)
     a, b = tmp_path / "a.json", tmp_path / "b.json"
-    io.write_json(a, header)
-    io.write_json(b, header)
+    artefacts.write_json(a, header)
+    artefacts.write_json(b, header)
     assert a.read_bytes() == b.read_bytes()
     obj = json.loads(a.read_text())
     assert obj["settings"] == {"x": None, "y": [0, 1, 2]}
@@ -200,34 +200,34 @@ def test_json_is_deterministic_and_has_no_nan(tmp_path):
 
 
 def test_parquet_artefact_is_deterministic_and_checked(tmp_path):
-    header = io.artefact_header("gyrocomp.components", settings={"method": "emd"}, seed=1)
+    header = artefacts.artefact_header("gyrocomp.components", settings={"method": "emd"}, seed=1)
     a, b = tmp_path / "a.parquet", tmp_path / "b.parquet"
-    io.write_table(a, _frame(), header)
-    io.write_table(b, _frame(), header)
+    artefacts.write_table(a, _frame(), header)
+    artefacts.write_table(b, _frame(), header)
     assert a.read_bytes() == b.read_bytes()
-    frame, read_header = io.read_table(a, "gyrocomp.components")
+    frame, read_header = artefacts.read_table(a, "gyrocomp.components")
     assert read_header["settings"] == {"method": "emd"}
     with pytest.raises(SchemaError, match="is a 'gyrocomp.components' artefact, expected 'gyrocomp.model'"):
-        io.read_table(a, "gyrocomp.model")
+        artefacts.read_table(a, "gyrocomp.model")
 
 
 def test_foreign_and_future_schemas_are_refused(tmp_path):
     path = tmp_path / "model.json"
-    obj = io.artefact_header("gyrocomp.model")
+    obj = artefacts.artefact_header("gyrocomp.model")
     obj["schema"]["version"] = "2.0"
     path.write_text(json.dumps(obj))
     with pytest.raises(SchemaError, match="version 2.0 is newer"):
-        io.read_json(path, "gyrocomp.model")
+        artefacts.read_json(path, "gyrocomp.model")
     path.write_text(json.dumps({"weights": [1, 2]}))
     with pytest.raises(SchemaError, match="not a gyrocomp artefact"):
-        io.read_json(path, "gyrocomp.model")
+        artefacts.read_json(path, "gyrocomp.model")
     path.write_text('{"schema": {"name": "gyrocomp.model", "version": "1.0"}, "x": [1, 2')
     with pytest.raises(InputError, match="model.json line 1: not valid JSON"):
-        io.read_json(path, "gyrocomp.model")
+        artefacts.read_json(path, "gyrocomp.model")
 
 
 def test_minor_version_is_accepted(tmp_path):
     path = tmp_path / "model.json"
-    obj = io.artefact_header("gyrocomp.model", version="1.7")
-    io.write_json(path, obj)
-    assert io.read_json(path, "gyrocomp.model")["schema"]["version"] == "1.7"
+    obj = artefacts.artefact_header("gyrocomp.model", version="1.7")
+    artefacts.write_json(path, obj)
+    assert artefacts.read_json(path, "gyrocomp.model")["schema"]["version"] == "1.7"

@@ -242,16 +242,16 @@ def _summarise(command: str, outcomes: list[dict]) -> BatchResult:
 
 
 def _write_summary(out: Path, result: BatchResult, settings: dict) -> None:
-    from gyrocomp import io
+    from gyrocomp import artefacts
 
     frame = result.frame()
-    header = io.artefact_header(
+    header = artefacts.artefact_header(
         SUMMARY_SCHEMA,
         inputs=[{"name": row["input"], "sha256": row["sha256"]} for row in result.rows],
         settings={"command": result.command, **settings},
     )
-    io.write_table(out / "summary.parquet", frame, header)
-    io.write_table(out / "summary.csv", frame, header)
+    artefacts.write_table(out / "summary.parquet", frame, header)
+    artefacts.write_table(out / "summary.csv", frame, header)
 
 
 @contextlib.contextmanager

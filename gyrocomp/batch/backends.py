@@ -26,7 +26,7 @@ from gyrocomp.errors import InputError
 
 __all__ = ["default_workers", "run_local", "run_dask"]
 
-_PRELOAD = ["numpy", "pandas", "pyarrow.parquet", "gyrocomp.io", "gyrocomp.batch.jobs"]
+_PRELOAD = ["numpy", "pandas", "pyarrow.parquet", "gyrocomp.recordings", "gyrocomp.artefacts", "gyrocomp.batch.jobs"]
 """Modules the forkserver imports once, so each worker starts warm."""
 
 

@@ -141,6 +141,7 @@ def process_input(task: dict) -> dict:
         ``threshold`` (the CI message, ``""`` when none), ``sha256`` (of
         the input, ``""`` when unreadable), ``figures``.
     """
+    from gyrocomp import artefacts
     from gyrocomp.batch import manifest as mf
     from gyrocomp.commands import from_settings
 
@@ -150,12 +151,7 @@ def process_input(task: dict) -> dict:
     outcome = {"input": task["input"], "output": task["name"], "status": "failed", "error": "", "exit_code": 0, "threshold": "", "sha256": "", "figures": {}}
     tmp = None
     try:
-        try:
-            sha = mf.file_sha256(source)
-        except FileNotFoundError:
-            raise InputError(f"{source}: no such file") from None
-        except IsADirectoryError:
-            raise InputError(f"{source}: is a directory, expected a file") from None
+        sha = artefacts.file_sha256(source)
         outcome["sha256"] = sha
         done = mf.is_up_to_date(out_dir / task["name"], job.name, sha, task["settings"])
         if done is not None:
@@ -183,12 +179,12 @@ def _one_line(err: BaseException) -> str:
 
 def _file_identity(path: str | os.PathLike, what: str) -> dict:
     """``{name, sha256}`` of a file a batch depends on (model, config)."""
-    from gyrocomp.batch.manifest import file_sha256
+    from gyrocomp.artefacts import file_record
 
     try:
-        return {"name": Path(path).name, "sha256": file_sha256(path)}
-    except OSError as err:
-        raise InputError(f"{what} {path}: {err.strerror or err}") from None
+        return file_record(path)
+    except InputError as err:
+        raise InputError(f"{what} {err}") from None
 
 
 def _threshold(check, *args, **kwargs) -> str:

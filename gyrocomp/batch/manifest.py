@@ -17,19 +17,18 @@ output it lists still has the recorded SHA-256.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import shutil
 import tempfile
 from pathlib import Path
 
-from gyrocomp import __version__, io
+from gyrocomp import __version__, artefacts
+from gyrocomp.artefacts import file_sha256
 
 __all__ = [
     "MANIFEST",
     "MANIFEST_SCHEMA",
-    "file_sha256",
     "read_manifest",
     "is_up_to_date",
     "write_manifest",
@@ -44,15 +43,6 @@ MANIFEST_SCHEMA = "gyrocomp.batch-manifest"
 
 _TMP_TAG = ".tmp-"
 _OLD_TAG = ".old-"
-
-
-def file_sha256(path: str | os.PathLike, chunk_bytes: int = 1 << 20) -> str:
-    """SHA-256 of a file's bytes, read in chunks of `chunk_bytes`."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(chunk_bytes), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def read_manifest(folder: str | os.PathLike) -> dict | None:
@@ -107,21 +97,21 @@ def write_manifest(folder: str | os.PathLike, *, command: str, input_name: str, 
         if p.is_file() and p.name != MANIFEST and not p.name.startswith(".")
     }
     manifest = {
-        **io.artefact_header(MANIFEST_SCHEMA, inputs=[{"name": input_name, "sha256": input_sha256}], settings=settings),
+        **artefacts.artefact_header(MANIFEST_SCHEMA, inputs=[{"name": input_name, "sha256": input_sha256}], settings=settings),
         "command": command,
         "input_sha256": input_sha256,
         "outputs": outputs,
         "figures": figures,
         "threshold": threshold,
     }
-    io.write_json(folder / MANIFEST, manifest)
+    artefacts.write_json(folder / MANIFEST, manifest)
     return manifest
 
 
 def new_folder(out_dir: str | os.PathLike, name: str) -> Path:
     """A fresh hidden temporary folder ``OUT/.<name>.tmp-<random>`` to build an input's outputs in."""
     folder = Path(tempfile.mkdtemp(prefix=f".{name}{_TMP_TAG}", dir=out_dir))
-    os.chmod(folder, 0o777 & ~io._umask())  # ordinary permissions, not mkdtemp's 0700
+    os.chmod(folder, 0o777 & ~artefacts._umask())  # ordinary permissions, not mkdtemp's 0700
     return folder
 
 
@@ -159,4 +149,4 @@ def remove_leftovers(out_dir: str | os.PathLike) -> list[str]:
 
 
 def _canonical(obj) -> str:
-    return json.dumps(io.jsonable(obj), sort_keys=True, allow_nan=False)
+    return json.dumps(artefacts.jsonable(obj), sort_keys=True, allow_nan=False)

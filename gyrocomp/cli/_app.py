@@ -128,12 +128,30 @@ def progress(ctx: typer.Context, description: str, out: Path | str | None = None
 
 # Options shared by every command that reads a recording.
 TimeCol = Annotated[str, typer.Option("--time-col", help="Name of the time column.")]
-RateCol = Annotated[str, typer.Option("--rate-col", help="Name of the angular-rate column.")]
-TempCol = Annotated[str, typer.Option("--temp-col", help="Name of the temperature column.")]
-TimeUnit = Annotated[str, typer.Option("--time-unit", help="Unit of the time column: s or ms.")]
-RateUnit = Annotated[str, typer.Option("--rate-unit", help="Unit of the rate column: deg/s, deg/h or rad/s.")]
+RateCol = Annotated[
+    str, typer.Option("--rate-col", help="Sensor axis column(s): a name, comma-separated names (gx,gy,gz) or a glob ('gyro_*').")
+]
+TempCol = Annotated[str, typer.Option("--temp-col", help="Temperature column(s): a name, names or a glob; the first is the temperature.")]
+TimeUnit = Annotated[
+    Optional[str],
+    typer.Option(
+        "--time-unit",
+        help="Unit of the time column: s, ms, us, ns or datetime (ISO 8601). Default: seconds, "
+        "refused when the sample rate or span is implausible; ISO text is read as datetimes.",
+    ),
+]
+RateUnit = Annotated[
+    str,
+    typer.Option("--rate-unit", help="Unit of the axes: deg/s, deg/h, rad/s, m/s^2 or g; one, or one per --rate-col entry (deg/s,g)."),
+]
 TempUnit = Annotated[str, typer.Option("--temp-unit", help="Unit of the temperature column: degC or K.")]
 Resample = Annotated[
     bool,
     typer.Option("--resample", help="Interpolate a jittered or gapped time axis onto a uniform grid instead of refusing it."),
+]
+Sep = Annotated[str, typer.Option("--sep", help="CSV field separator, e.g. ';', or tab.")]
+DecimalMark = Annotated[str, typer.Option("--decimal", help="CSV decimal mark, e.g. ',' for decimal-comma files.")]
+Dedupe = Annotated[
+    Optional[str],
+    typer.Option("--dedupe", help="Merge duplicate time stamps: first (keep the first row) or mean; default: refuse them."),
 ]

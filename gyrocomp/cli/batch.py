@@ -44,7 +44,7 @@ def batch(
       run         --test TEMPLATE --seed --set, column options (and --config here); TEMPLATE may
                   hold {stem}, {name}, {dir} of each training input, e.g. --test 'test/{name}'
       diagnose    --holdout TEMPLATE (as --test) --sim, column options, --resample (and --config)
-    Column options: --time-col --rate-col --temp-col --time-unit --rate-unit --temp-unit.
+    Column options: --time-col --rate-col --temp-col --time-unit --rate-unit --temp-unit --sep --decimal --dedupe.
     """
     console = console_for(ctx)
     with report_errors(ctx):

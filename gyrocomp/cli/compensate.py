@@ -8,7 +8,22 @@ from typing import Annotated, Optional
 
 import typer
 
-from gyrocomp.cli._app import RateCol, RateUnit, Resample, TempCol, TempUnit, TimeCol, TimeUnit, app, console_for, progress, report_errors
+from gyrocomp.cli._app import (
+    DecimalMark,
+    Dedupe,
+    RateCol,
+    RateUnit,
+    Resample,
+    Sep,
+    TempCol,
+    TempUnit,
+    TimeCol,
+    TimeUnit,
+    app,
+    console_for,
+    progress,
+    report_errors,
+)
 
 
 @app.command()
@@ -24,9 +39,12 @@ def compensate(
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
-    time_unit: TimeUnit = "s",
+    time_unit: TimeUnit = None,
     rate_unit: RateUnit = "deg/s",
     temp_unit: TempUnit = "degC",
+    sep: Sep = ",",
+    decimal: DecimalMark = ".",
+    dedupe: Dedupe = None,
     resample: Resample = False,
 ) -> None:
     """Remove the learned temperature drift from a recording.

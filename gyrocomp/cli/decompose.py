@@ -8,9 +8,12 @@ from typing import Annotated, List, Optional
 import typer
 
 from gyrocomp.cli._app import (
+    DecimalMark,
+    Dedupe,
     RateCol,
     RateUnit,
     Resample,
+    Sep,
     TempCol,
     TempUnit,
     TimeCol,
@@ -36,9 +39,12 @@ def decompose(
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
-    time_unit: TimeUnit = "s",
+    time_unit: TimeUnit = None,
     rate_unit: RateUnit = "deg/s",
     temp_unit: TempUnit = "degC",
+    sep: Sep = ",",
+    decimal: DecimalMark = ".",
+    dedupe: Dedupe = None,
     resample: Resample = False,
 ) -> None:
     """Decompose `rate` into components, fastest first, the residue or trend last.

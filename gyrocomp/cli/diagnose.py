@@ -8,9 +8,12 @@ from typing import Annotated, Optional
 import typer
 
 from gyrocomp.cli._app import (
+    DecimalMark,
+    Dedupe,
     RateCol,
     RateUnit,
     Resample,
+    Sep,
     TempCol,
     TempUnit,
     TimeCol,
@@ -40,9 +43,12 @@ def diagnose(
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
-    time_unit: TimeUnit = "s",
+    time_unit: TimeUnit = None,
     rate_unit: RateUnit = "deg/s",
     temp_unit: TempUnit = "degC",
+    sep: Sep = ",",
+    decimal: DecimalMark = ".",
+    dedupe: Dedupe = None,
     resample: Resample = False,
 ) -> None:
     """Calibrate the baseline simulator (offset + cubic in temperature + white noise) on FIT,

@@ -7,7 +7,21 @@ from typing import Annotated, List, Optional
 
 import typer
 
-from gyrocomp.cli._app import RateCol, RateUnit, TempCol, TempUnit, TimeCol, TimeUnit, app, console_for, report_errors, state
+from gyrocomp.cli._app import (
+    DecimalMark,
+    Dedupe,
+    RateCol,
+    RateUnit,
+    Sep,
+    TempCol,
+    TempUnit,
+    TimeCol,
+    TimeUnit,
+    app,
+    console_for,
+    report_errors,
+    state,
+)
 
 
 @app.command()
@@ -23,9 +37,12 @@ def run(
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
-    time_unit: TimeUnit = "s",
+    time_unit: TimeUnit = None,
     rate_unit: RateUnit = "deg/s",
     temp_unit: TempUnit = "degC",
+    sep: Sep = ",",
+    decimal: DecimalMark = ".",
+    dedupe: Dedupe = None,
 ) -> None:
     """The whole chain for each method: decompose, classify, train, compensate (full and causal), score.
 

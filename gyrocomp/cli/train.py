@@ -7,7 +7,20 @@ from typing import Annotated, List, Optional
 
 import typer
 
-from gyrocomp.cli._app import RateCol, RateUnit, TempCol, TempUnit, TimeCol, TimeUnit, app, console_for, report_errors
+from gyrocomp.cli._app import (
+    DecimalMark,
+    Dedupe,
+    RateCol,
+    RateUnit,
+    Sep,
+    TempCol,
+    TempUnit,
+    TimeCol,
+    TimeUnit,
+    app,
+    console_for,
+    report_errors,
+)
 
 
 @app.command()
@@ -28,9 +41,12 @@ def train(
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
-    time_unit: TimeUnit = "s",
+    time_unit: TimeUnit = None,
     rate_unit: RateUnit = "deg/s",
     temp_unit: TempUnit = "degC",
+    sep: Sep = ",",
+    decimal: DecimalMark = ".",
+    dedupe: Dedupe = None,
 ) -> None:
     """Fit the drift models of a pipeline against temperature and temperature rate.
 

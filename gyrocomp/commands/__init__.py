@@ -32,7 +32,7 @@ STAGES = ("decompose", "classify", "train", "compensate", "allan", "simulate", "
 """The stage modules of this package, in pipeline order."""
 
 COLUMN_PARAMS = {"time_col": "time", "rate_col": "rate", "temp_col": "temperature", "temp_unit": "temperature_unit"}
-"""Command-line parameter names of the :class:`~gyrocomp.io.ColumnSpec` fields whose names differ.
+"""Command-line parameter names of the :class:`~gyrocomp.recordings.ColumnSpec` fields whose names differ.
 
 Every other field of the column spec is read from the parameter of its own name."""
 
@@ -51,11 +51,11 @@ def stage(name: str) -> ModuleType:
 
 
 def column_spec(params: Mapping[str, Any]):
-    """The :class:`~gyrocomp.io.ColumnSpec` of command-line parameters (``time_col``, ``rate_col``, ...).
+    """The :class:`~gyrocomp.recordings.ColumnSpec` of command-line parameters (``time_col``, ``rate_col``, ...).
 
     A parameter that is absent keeps the column spec's default.
     """
-    from gyrocomp.io import ColumnSpec
+    from gyrocomp.recordings import ColumnSpec
 
     given = {}
     for field in dataclasses.fields(ColumnSpec):
@@ -68,7 +68,7 @@ def column_spec(params: Mapping[str, Any]):
 
 def param_names(cls) -> tuple[str, ...]:
     """Command-line parameter names that :func:`from_params` reads for an ``Options`` class."""
-    from gyrocomp.io import ColumnSpec
+    from gyrocomp.recordings import ColumnSpec
 
     names = []
     for field in dataclasses.fields(cls):
@@ -106,7 +106,7 @@ def to_settings(options) -> dict:
 
 def from_settings(cls, settings: Mapping[str, Any]):
     """The options of :func:`to_settings`."""
-    from gyrocomp.io import ColumnSpec
+    from gyrocomp.recordings import ColumnSpec
 
     given = {}
     for field in dataclasses.fields(cls):

@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Optional, Sequence
 
-from gyrocomp.io import ColumnSpec
+from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files", "check"]
 
@@ -28,7 +28,7 @@ class Options:
         PNG of the curves, bands and fitted terms to write as well.
     max_arw, max_bias_instability, max_rrw : float or None
         CI bounds on the read-offs [deg/sqrt(h), deg/h, deg/h/sqrt(h)] (:func:`check`).
-    columns : gyrocomp.io.ColumnSpec
+    columns : gyrocomp.recordings.ColumnSpec
         Column names and units of the recordings.
     resample : bool
         Interpolate a jittered time axis instead of refusing it.
@@ -48,7 +48,7 @@ class Options:
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options()) -> list:
     """Read recordings, analyse one column of each and write ``allan.json`` (and the plot).
 
-    Each recording is read (:func:`gyrocomp.io.read_recording`), its column
+    Each recording is read (:func:`gyrocomp.recordings.read_recording`), its column
     analysed (:func:`gyrocomp.allan.analyse`), and every series written to
     `out` (``-`` is stdout) as :func:`gyrocomp.allan.allan_artefact`. The
     bounds are left to :func:`check`, so that the artefacts exist when one
@@ -67,25 +67,23 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     list of gyrocomp.allan.AllanSeries
     """
     from gyrocomp import allan as al
-    from gyrocomp import io
+    from gyrocomp import artefacts, recordings
     from gyrocomp.commands import PLOT_LOCK
     from gyrocomp.config import settings_dict
     from gyrocomp.errors import InputError
 
     settings = al.get_config(options.config)
     spec, column = options.columns, options.column
-    source = {"time": spec.time, "rate": spec.rate, "temperature": spec.temperature}.get(column, column)
-    usecols = list(dict.fromkeys([spec.time, spec.rate, source]))  # the only columns read
     series, records = [], []
     for path in inputs:
-        rec = io.read_recording(path, spec, min_samples=3, resample=options.resample, usecols=usecols)
+        rec = recordings.read_recording(path, spec, min_samples=3, resample=options.resample, usecols=[column]).axis()
         if column not in rec.columns:
             raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
         series.append(al.analyse(rec.column(column), rec.fs_hz, taus=options.taus, name=Path(rec.name).name, column=column, settings=settings))
         records.append(rec.input_record())
         del rec
     resolved = {**settings_dict(settings), "taus": options.taus or settings.taus, "column": column}
-    io.write_json(out, al.allan_artefact(series, inputs=records, settings=resolved))
+    artefacts.write_json(out, al.allan_artefact(series, inputs=records, settings=resolved))
     if options.plot is not None:
         with PLOT_LOCK:
             al.plot_allan(series, options.plot)

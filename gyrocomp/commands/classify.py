@@ -82,16 +82,13 @@ def write(components: str | os.PathLike, settings, out: str | os.PathLike, *, pl
     InputError
         The header lists no components, or a listed column is missing.
     """
-    import hashlib
-    from pathlib import Path
-
-    from gyrocomp import io
+    from gyrocomp import artefacts
     from gyrocomp.classify import CLASSES_SCHEMA, classify, plot_entropies
     from gyrocomp.commands import PLOT_LOCK
     from gyrocomp.config import settings_dict
     from gyrocomp.errors import InputError
 
-    frame, header = io.read_table(components, "gyrocomp.components")
+    frame, header = artefacts.read_table(components, "gyrocomp.components")
     names = header.get("components")
     if not isinstance(names, list) or not names:
         raise InputError(f"{components}: header lists no `components`")
@@ -99,12 +96,11 @@ def write(components: str | os.PathLike, settings, out: str | os.PathLike, *, pl
     if missing:
         raise InputError(f"{components}: component column {missing[0]!r} listed in the header is missing")
     entries = classify(frame[names].to_numpy(dtype=float).T, names, settings)
-    sha = hashlib.sha256(Path(components).read_bytes()).hexdigest()
-    result = io.artefact_header(CLASSES_SCHEMA, inputs=[{"name": Path(components).name, "sha256": sha}], settings=settings_dict(settings))
+    result = artefacts.artefact_header(CLASSES_SCHEMA, inputs=[artefacts.file_record(components)], settings=settings_dict(settings))
     result["entropy"] = {"kind": settings.entropy, **dataclasses.asdict(settings.active)}
     result["thresholds"] = {"noise_above": settings.noise_above, "drift_below": settings.drift_below}
     result["components"] = entries
-    io.write_json(out, result)
+    artefacts.write_json(out, result)
     if plot is not None:
         with PLOT_LOCK:
             plot_entropies(entries, settings, plot)

@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from gyrocomp.io import ColumnSpec
+from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files", "write"]
 
@@ -28,7 +28,7 @@ class Options:
         Seed of the decomposition in full mode (``None``: the training run's).
     workers : int
         Processes for the decomposition in full mode.
-    columns : gyrocomp.io.ColumnSpec
+    columns : gyrocomp.recordings.ColumnSpec
     resample : bool
         Interpolate a jittered time axis instead of refusing it.
     """
@@ -58,23 +58,23 @@ def to_files(
         ``time``, ``rate``, ``temperature``, ``drift_model``, ``compensated``.
     summary : dict
         From :func:`~gyrocomp.pipeline.compensate.compensate`.
-    recording : gyrocomp.io.Recording
+    recording : gyrocomp.recordings.Recording
     caught : list of warnings.WarningMessage
         The warnings compensating raised (e.g. leaving the training temperature range).
     """
     import warnings
 
-    from gyrocomp import io
+    from gyrocomp import artefacts, recordings
     from gyrocomp.pipeline.compensate import compensate, load_model
 
     recording_path, model_path = inputs
-    drift = load_model(io.read_json(model_path, "gyrocomp.model"), str(model_path))
-    recording = io.read_recording(recording_path, options.columns, require_temperature=True, min_samples=2, resample=options.resample)
+    drift = load_model(artefacts.read_json(model_path, "gyrocomp.model"), str(model_path))
+    recording = recordings.read_recording(recording_path, options.columns, require_temperature=True, min_samples=2, resample=options.resample).axis()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         frame, summary = compensate(recording, drift, options.mode, clamp=options.clamp, seed=options.seed, workers=options.workers, callback=progress)
     if str(out) == "-":
-        io.write_table(out, frame, {})
+        artefacts.write_table(out, frame, {})
     else:
         write(Path(out), frame, summary, recording, Path(model_path), options.mode, options.seed)
     return frame, summary, recording, list(caught)
@@ -89,17 +89,16 @@ def write(path: Path, frame, summary: dict, recording, model_path: Path, mode: s
     """
     import numpy as np
 
-    from gyrocomp import io
+    from gyrocomp import artefacts
     from gyrocomp.pipeline.compensate import COMPENSATION_SCHEMA
-    from gyrocomp.pipeline.train import file_record
 
-    header = io.artefact_header(
+    header = artefacts.artefact_header(
         COMPENSATION_SCHEMA,
-        inputs=[recording.input_record(), file_record(model_path)],
+        inputs=[recording.input_record(), artefacts.file_record(model_path)],
         settings={"mode": mode},
         seed=seed,
     )
-    io.write_table(path, frame, header)
+    artefacts.write_table(path, frame, header)
     figures = {
         "n_samples": int(len(frame)),
         "fs_hz": float(recording.fs_hz),
@@ -108,5 +107,5 @@ def write(path: Path, frame, summary: dict, recording, model_path: Path, mode: s
         "compensated_std_dps": float(np.std(frame["compensated"].to_numpy())),
     }
     sidecar = {**header, **summary, "figures": figures}
-    io.write_json(path.with_suffix(".json"), sidecar)
+    artefacts.write_json(path.with_suffix(".json"), sidecar)
     return sidecar

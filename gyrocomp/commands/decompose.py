@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from gyrocomp.io import ColumnSpec
+from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files", "write"]
 
@@ -30,7 +30,7 @@ class Options:
         Pipeline TOML (path or name in ``configs/``) whose ``[decompose]`` table is read.
     overrides : tuple of str
         ``key=value`` assignments to the ``[decompose]`` table (``--set``).
-    columns : gyrocomp.io.ColumnSpec
+    columns : gyrocomp.recordings.ColumnSpec
     resample : bool
         Interpolate a jittered time axis instead of refusing it.
     """
@@ -70,10 +70,10 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     sidecar : dict
         The ``components.json`` object written.
     """
-    from gyrocomp import io
+    from gyrocomp import recordings
 
     (path,) = inputs
-    recording = io.read_recording(path, options.columns, min_samples=4, resample=options.resample)
+    recording = recordings.read_recording(path, options.columns, min_samples=4, resample=options.resample).axis()
     return write(recording, options.settings(), out, seed=options.seed, workers=options.workers, progress=progress)
 
 
@@ -85,7 +85,7 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
 
     Parameters
     ----------
-    recording : gyrocomp.io.Recording
+    recording : gyrocomp.recordings.Recording
     settings : gyrocomp.decompose.DecomposeSettings
     out : path-like
         ``components.parquet`` to write: ``time``, ``rate``,
@@ -105,7 +105,7 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
     """
     import pandas as pd
 
-    from gyrocomp import io
+    from gyrocomp import artefacts
     from gyrocomp.config import settings_dict
     from gyrocomp.decompose import SIDECAR_SCHEMA, component_stats, decompose
 
@@ -117,10 +117,10 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
         frame[name] = values
     resolved = settings_dict(settings)
     records = [recording.input_record()]
-    header = io.artefact_header("gyrocomp.components", inputs=records, settings=resolved, seed=seed)
+    header = artefacts.artefact_header("gyrocomp.components", inputs=records, settings=resolved, seed=seed)
     header.update(components=list(result.names), fs_hz=recording.fs_hz)
-    sidecar = io.artefact_header(SIDECAR_SCHEMA, inputs=records, settings=resolved, seed=seed)
+    sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=records, settings=resolved, seed=seed)
     sidecar.update(method=settings.method, fs_hz=recording.fs_hz, **component_stats(result, recording.fs_hz))
-    io.write_table(out, frame, header)
-    io.write_json(Path(out).with_suffix(".json"), sidecar)
+    artefacts.write_table(out, frame, header)
+    artefacts.write_json(Path(out).with_suffix(".json"), sidecar)
     return result, sidecar

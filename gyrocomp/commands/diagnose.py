@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from gyrocomp.io import ColumnSpec
+from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
 
@@ -28,7 +28,7 @@ class Options:
         ``gap.png`` to write: gap by regime and timescale, before and after.
     markdown : path-like or None
         ``report.md`` to write.
-    columns : gyrocomp.io.ColumnSpec
+    columns : gyrocomp.recordings.ColumnSpec
     resample : bool
         Interpolate a jittered time axis instead of refusing it.
     """
@@ -56,7 +56,7 @@ def to_files(
     dict
         The report as written (:func:`gyrocomp.diagnose.report.to_json`).
     """
-    from gyrocomp import io
+    from gyrocomp import artefacts, recordings
     from gyrocomp.commands import PLOT_LOCK
     from gyrocomp.config import settings_dict
     from gyrocomp.diagnose import diagnose, get_config
@@ -64,8 +64,8 @@ def to_files(
 
     (fit,) = inputs
     settings = get_config(options.config)
-    fit_rec = io.read_recording(fit, options.columns, resample=options.resample, min_samples=64)
-    hold_rec = io.read_recording(options.holdout, options.columns, resample=options.resample, min_samples=64) if options.holdout else None
+    fit_rec = recordings.read_recording(fit, options.columns, resample=options.resample, min_samples=64).axis()
+    hold_rec = recordings.read_recording(options.holdout, options.columns, resample=options.resample, min_samples=64).axis() if options.holdout else None
     start = ()
     if options.sim is not None:
         from gyrocomp.sim.model import load_sim_config
@@ -74,9 +74,9 @@ def to_files(
     body = diagnose(fit_rec, hold_rec, settings, start_effects=start, callback=progress)
     records = [fit_rec.input_record()] + ([hold_rec.input_record()] if hold_rec else [])
     report = to_json(body, inputs=records, settings=settings_dict(settings))
-    io.write_json(out, report)
+    artefacts.write_json(out, report)
     if options.markdown is not None:
-        with io.atomic_path(options.markdown) as tmp:
+        with artefacts.atomic_path(options.markdown) as tmp:
             Path(tmp).write_text(to_markdown(report), encoding="utf-8")
     if options.plot is not None:
         with PLOT_LOCK:

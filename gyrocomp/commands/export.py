@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Optional, Sequence
 
-from gyrocomp.io import ColumnSpec
+from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
 
@@ -24,7 +24,7 @@ class Options:
         As :class:`gyrocomp.export.ExportOptions`.
     vectors : path or None
         c: recording whose first `n_vectors` samples become the test vectors.
-    columns : gyrocomp.io.ColumnSpec
+    columns : gyrocomp.recordings.ColumnSpec
         Columns of `vectors`.
     """
 
@@ -48,15 +48,15 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     summary : dict
         From :func:`gyrocomp.export.export_model`.
     """
-    from gyrocomp import io
+    from gyrocomp import artefacts, recordings
     from gyrocomp.export import ExportOptions, export_model
     from gyrocomp.pipeline.compensate import load_model
 
     (model_path,) = inputs
-    drift = load_model(io.read_json(model_path, "gyrocomp.model"), str(model_path))
+    drift = load_model(artefacts.read_json(model_path, "gyrocomp.model"), str(model_path))
     recording = None
     if options.vectors is not None:
-        recording = io.read_recording(options.vectors, options.columns, require_temperature=True, min_samples=2)
+        recording = recordings.read_recording(options.vectors, options.columns, require_temperature=True, min_samples=2)
     export_options = ExportOptions(
         options.fit_polynomial, options.axis.lower(), options.instance, options.device_id, recording, options.n_vectors, options.prefix
     )
@@ -64,6 +64,6 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     if str(out) == "-":
         sys.stdout.write(text)
     else:
-        with io.atomic_path(out) as tmp:
+        with artefacts.atomic_path(out) as tmp:
             Path(tmp).write_text(text, encoding="utf-8")
     return drift, summary

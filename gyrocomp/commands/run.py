@@ -27,13 +27,14 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
-from gyrocomp import io
+from gyrocomp import artefacts, recordings
 from gyrocomp.config import apply_overrides, bind, load_config, settings_dict
 from gyrocomp.errors import InputError
 from gyrocomp.pipeline import evaluate
 from gyrocomp.pipeline.compensate import compensate, load_model
 from gyrocomp.pipeline.settings import EvaluateSettings, RunSettings, SignalSettings, pipeline_settings
-from gyrocomp.pipeline.train import file_record, train_direct, train_parallel
+from gyrocomp.artefacts import file_record
+from gyrocomp.pipeline.train import train_direct, train_parallel
 
 __all__ = ["REPORT_SCHEMA", "Options", "to_files", "load_run_config", "decompose_and_classify"]
 
@@ -72,7 +73,7 @@ class Options:
         Processes for the decompositions.
     overrides : tuple of str
         ``table.key=value`` assignments to the run config (``--set``).
-    columns : gyrocomp.io.ColumnSpec
+    columns : gyrocomp.recordings.ColumnSpec
         Column names and units of the recordings.
     """
 
@@ -80,7 +81,7 @@ class Options:
     seed: int = 0
     workers: int = 1
     overrides: tuple = ()
-    columns: io.ColumnSpec = io.ColumnSpec()
+    columns: recordings.ColumnSpec = recordings.ColumnSpec()
 
 
 def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, options: Options = Options(), *, progress: Progress | None = None) -> dict:
@@ -112,9 +113,9 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
     seed, workers, columns = options.seed, options.workers, options.columns
     run_settings, eval_settings, signal_settings, _ = load_run_config(config_path, options.overrides)
     out = Path(out_dir)
-    train_rec = io.read_recording(train_path, columns, require_temperature=True, min_samples=16)
+    train_rec = recordings.read_recording(train_path, columns, require_temperature=True, min_samples=16).axis()
     held_out = options.test is not None
-    test_rec = io.read_recording(options.test, columns, require_temperature=True, min_samples=16) if held_out else train_rec
+    test_rec = recordings.read_recording(options.test, columns, require_temperature=True, min_samples=16).axis() if held_out else train_rec
     signal, parts = evaluate.injected_signal(test_rec.time_s, test_rec.fs_hz, signal_settings)
     signal_rec = _with_signal(test_rec, signal)
 
@@ -149,7 +150,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
             rows.append(_score(name, mode, outputs["test"], kept, test_rec.fs_hz, eval_settings, info))
         methods.append(info)
     result = {
-        **io.artefact_header(
+        **artefacts.artefact_header(
             REPORT_SCHEMA,
             inputs=[train_rec.input_record()] + ([test_rec.input_record()] if held_out else []),
             settings={
@@ -175,7 +176,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
     return result
 
 
-def decompose_and_classify(recording: io.Recording, config: dict, source: str, folder: Path, *, seed: int, workers: int, callback=None) -> tuple[dict, dict]:
+def decompose_and_classify(recording: recordings.Recording, config: dict, source: str, folder: Path, *, seed: int, workers: int, callback=None) -> tuple[dict, dict]:
     """Decompose a recording and classify its components as ``gyrocomp decompose`` and ``classify`` do.
 
     Writes ``components.parquet`` (+ the ``components.json`` sidecar,
@@ -224,8 +225,8 @@ def _train_method(config, source, name, train_rec, folder: Path, seed, workers, 
         info["stage_times_s"].update(times)
         step(f"{name}: train", 0, 1)
         t0 = time.perf_counter()
-        components, header = io.read_table(paths["components"], "gyrocomp.components")
-        classes = io.read_json(paths["classes"], "gyrocomp.classes")
+        components, header = artefacts.read_table(paths["components"], "gyrocomp.components")
+        classes = artefacts.read_json(paths["classes"], "gyrocomp.classes")
         model = train_parallel(
             components, header, classes, config, source=source, seed=seed,
             inputs=[file_record(paths["components"]), file_record(paths["classes"])],
@@ -238,9 +239,9 @@ def _train_method(config, source, name, train_rec, folder: Path, seed, workers, 
         model = train_direct(train_rec, config, source=source, seed=seed)
         info["stage_times_s"]["train"] = time.perf_counter() - t0
     info["train_time_s"] = time.perf_counter() - t_train
-    io.write_json(model_path, model)
+    artefacts.write_json(model_path, model)
     info["artefacts"]["model"] = str(Path(name) / "model.json")
-    return info, load_model(io.read_json(model_path, "gyrocomp.model"), str(model_path))
+    return info, load_model(artefacts.read_json(model_path, "gyrocomp.model"), str(model_path))
 
 
 def _method_config(method: str, overrides) -> tuple[dict, str, str]:
@@ -265,14 +266,14 @@ def _score(name, mode, output, kept, fs_hz, settings: EvaluateSettings, info: di
     }
 
 
-def _with_signal(recording: io.Recording, signal: np.ndarray) -> io.Recording:
+def _with_signal(recording: recordings.Recording, signal: np.ndarray) -> recordings.Recording:
     """The test run with the injected rate added; its hash covers the file's hash and the signal."""
     import hashlib
 
     data = recording.data.copy()
     data["rate"] = data["rate"].to_numpy() + signal
     digest = hashlib.sha256(recording.sha256.encode() + np.ascontiguousarray(signal).tobytes()).hexdigest()
-    return io.Recording(
+    return recordings.Recording(
         data=data,
         name=f"{recording.name}+signal",
         sha256=digest,
@@ -281,7 +282,7 @@ def _with_signal(recording: io.Recording, signal: np.ndarray) -> io.Recording:
     )
 
 
-def _describe(recording: io.Recording) -> dict:
+def _describe(recording: recordings.Recording) -> dict:
     temperature = recording.temperature_c
     return {
         "name": Path(recording.name).name,

@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from gyrocomp.io import ColumnSpec
+from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
 
@@ -32,7 +32,7 @@ class Options:
         ``table.key=value`` assignments (``--set``).
     truth_columns : bool or None
         Add a ``truth_*`` column per contribution.
-    columns : gyrocomp.io.ColumnSpec
+    columns : gyrocomp.recordings.ColumnSpec
         Columns of a `profile` recording (its temperature column is the one used).
     """
 
@@ -67,13 +67,13 @@ def to_files(
     config : gyrocomp.sim.SimConfig
         The resolved config.
     """
-    from gyrocomp import io, sim
+    from gyrocomp import artefacts, recordings, sim
 
     (config,) = inputs or (None,)
     recording, profile = None, options.profile
     if profile is not None and Path(profile).suffix.lower() in _RECORDING_SUFFIXES:
         spec = dataclasses.replace(ColumnSpec(), temperature=options.columns.temperature)
-        recording = io.read_recording(profile, spec, require_temperature=True, resample=True)
+        recording = recordings.read_recording(profile, spec, require_temperature=True, resample=True).axis()
         profile = None
     cfg = sim.load_sim_config(
         config,
@@ -84,5 +84,5 @@ def to_files(
         truth_columns=options.truth_columns,
     )
     frame, header = sim.run(cfg, temperature_from=recording, progress=progress)
-    io.write_table(out, frame, header)
+    artefacts.write_table(out, frame, header)
     return frame, header, cfg

@@ -6,7 +6,7 @@ import dataclasses
 import os
 from typing import Sequence
 
-from gyrocomp.io import ColumnSpec
+from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
 
@@ -24,7 +24,7 @@ class Options:
         Seed of every learner that draws random numbers.
     overrides : tuple of str
         ``table.key=value`` assignments to the config (``--set``).
-    columns : gyrocomp.io.ColumnSpec
+    columns : gyrocomp.recordings.ColumnSpec
         Column names and units of a direct pipeline's recording.
     """
 
@@ -51,11 +51,12 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     dict
         The model as written.
     """
-    from gyrocomp import io
+    from gyrocomp import artefacts, recordings
     from gyrocomp.config import apply_overrides, load_config
     from gyrocomp.errors import InputError
     from gyrocomp.pipeline.settings import pipeline_settings
-    from gyrocomp.pipeline.train import file_record, train_direct, train_parallel
+    from gyrocomp.artefacts import file_record
+    from gyrocomp.pipeline.train import train_direct, train_parallel
 
     cfg = apply_overrides(load_config(options.config), options.overrides)
     pipeline = pipeline_settings(cfg, options.config)
@@ -64,14 +65,14 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         if not rest:
             raise InputError(f"{options.config}: a parallel pipeline needs CLASSES (classes.json from `gyrocomp classify`)")
         (classes,) = rest
-        frame, header = io.read_table(source, "gyrocomp.components")
-        labels = io.read_json(classes, "gyrocomp.classes")
+        frame, header = artefacts.read_table(source, "gyrocomp.components")
+        labels = artefacts.read_json(classes, "gyrocomp.classes")
         records = [file_record(source), file_record(classes)]
         model = train_parallel(frame, header, labels, cfg, source=options.config, seed=options.seed, inputs=records)
     else:
         if rest:
             raise InputError(f"{options.config}: a direct pipeline ({pipeline.kind}) trains on the recording alone; drop {rest[0]}")
-        recording = io.read_recording(source, options.columns, require_temperature=True, min_samples=16)
+        recording = recordings.read_recording(source, options.columns, require_temperature=True, min_samples=16).axis()
         model = train_direct(recording, cfg, source=options.config, seed=options.seed)
-    io.write_json(out, model)
+    artefacts.write_json(out, model)
     return model

@@ -101,9 +101,9 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
 
     Parameters
     ----------
-    fit : gyrocomp.io.Recording
+    fit : gyrocomp.recordings.Recording
         The recording the model is calibrated on.
-    holdout : gyrocomp.io.Recording, optional
+    holdout : gyrocomp.recordings.Recording, optional
         A second run of the same gyro, never used for fitting; it checks
         every selection and measures the held-out gap.
     settings : DiagnoseSettings

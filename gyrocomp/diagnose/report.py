@@ -6,13 +6,13 @@ import os
 
 import numpy as np
 
-from gyrocomp.io import artefact_header, atomic_path
+from gyrocomp.artefacts import artefact_header, atomic_path
 
 __all__ = ["to_json", "to_markdown", "summary_table", "plot_gap"]
 
 
 def to_json(body: dict, *, inputs: list, settings: dict) -> dict:
-    """Header (:func:`gyrocomp.io.artefact_header`) + the body of :func:`gyrocomp.diagnose.diagnose`."""
+    """Header (:func:`gyrocomp.artefacts.artefact_header`) + the body of :func:`gyrocomp.diagnose.diagnose`."""
     out = artefact_header("gyrocomp.diagnosis", inputs=inputs, settings=settings, seed=None)
     out.update({k: v for k, v in body.items() if k != "settings"})
     out["gap_definition"] = (

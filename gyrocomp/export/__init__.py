@@ -39,7 +39,7 @@ class ExportOptions:
         PX4 slot (0..3, default 0) or ArduPilot IMU (1..3, default 1).
     device_id : int
         PX4 ``TC_G<i>_ID``.
-    vectors : gyrocomp.io.Recording or None
+    vectors : gyrocomp.recordings.Recording or None
         c: the recording whose first `n_vectors` samples become the test
         vectors (default: a synthetic sweep across and beyond the training ranges).
     n_vectors : int
@@ -95,7 +95,7 @@ def reference_vectors(model, recording=None, n: int = 2048) -> dict:
     """
     import warnings
 
-    from gyrocomp import io
+    from gyrocomp import recordings
     from gyrocomp.pipeline.compensate import ExtrapolationWarning, compensate
 
     if recording is None:
@@ -109,9 +109,9 @@ def reference_vectors(model, recording=None, n: int = 2048) -> dict:
         import pandas as pd
 
         frame = pd.DataFrame({"time": k / fs, "rate": 0.3 * np.sin(2 * np.pi * 7 * k / n), "temperature": temperature})
-        recording = io.recording_from_frame(frame, name="sweep")
+        recording = recordings.recording_from_frame(frame, name="sweep")
     else:
-        recording = io.recording_from_frame(recording.data.iloc[:n].reset_index(drop=True), name=recording.name)
+        recording = recordings.recording_from_frame(recording.data.iloc[:n].reset_index(drop=True), name=recording.name)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ExtrapolationWarning)  # leaving the ranges is the point of the vectors
         frame, _ = compensate(recording, model, "causal")

@@ -30,7 +30,7 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from gyrocomp import io
+from gyrocomp import artefacts, recordings
 from gyrocomp.config import bind
 from gyrocomp.errors import InputError
 from gyrocomp.pipeline import rate as rate_estimator
@@ -117,7 +117,7 @@ def load_model(obj: dict, name: str = "model.json") -> DriftModel:
     """
     from gyrocomp import models
 
-    io.check_header(obj, MODEL_SCHEMA, name)
+    artefacts.check_header(obj, MODEL_SCHEMA, name)
     try:
         rate_table = {k: obj["rate_estimator"][k] for k in ("method", "window_s", "polyorder")}
         rate = bind(RateSettings, rate_table, f"{name} rate_estimator")
@@ -185,7 +185,7 @@ def _flag(name: str, key: str, value) -> bool:
 
 
 def compensate(
-    recording: io.Recording,
+    recording: recordings.Recording,
     model: DriftModel,
     mode: str = "causal",
     *,
@@ -198,7 +198,7 @@ def compensate(
 
     Parameters
     ----------
-    recording : gyrocomp.io.Recording
+    recording : gyrocomp.recordings.Recording
         With ``temperature``.
     model : DriftModel
         From :func:`load_model`.

@@ -12,7 +12,7 @@ import math
 import os
 from pathlib import Path
 
-from gyrocomp import io
+from gyrocomp import artefacts
 
 __all__ = ["BASELINE", "findings", "write", "markdown", "plot"]
 
@@ -67,8 +67,8 @@ def findings(report: dict) -> list[str]:
 def write(folder: str | os.PathLike, report: dict) -> None:
     """Write ``report.json``, ``report.md`` and ``report.png`` into `folder` (atomically)."""
     folder = Path(folder)
-    io.write_json(folder / "report.json", report)
-    with io.atomic_path(folder / "report.md") as tmp:
+    artefacts.write_json(folder / "report.json", report)
+    with artefacts.atomic_path(folder / "report.md") as tmp:
         Path(tmp).write_text(markdown(report), encoding="utf-8")
     plot(report, folder / "report.png")
 
@@ -156,7 +156,7 @@ def plot(report: dict, path: str | os.PathLike) -> None:
     axes[2].set(ylabel="signal kept [%]", title="Injected angular rate that survives")
     axes[2].legend(fontsize=7)
     fig.tight_layout()
-    with io.atomic_path(path) as tmp:
+    with artefacts.atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=110)
     plt.close(fig)
 

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gyrocomp import io
+from gyrocomp import artefacts, recordings
 from gyrocomp.config import bind, settings_dict
 from gyrocomp.errors import InputError
 from gyrocomp.pipeline import rate as rate_estimator
@@ -42,19 +42,19 @@ from gyrocomp.pipeline.settings import (
     rate_settings,
 )
 
-__all__ = ["MODEL_SCHEMA", "INPUTS", "train_direct", "train_parallel", "segments", "file_record"]
+__all__ = ["MODEL_SCHEMA", "INPUTS", "train_direct", "train_parallel", "segments"]
 
 MODEL_SCHEMA = "gyrocomp.model"
 INPUTS = ("temperature_c", "temperature_rate_c_per_s")
 """Names of the learners' input columns, in order."""
 
 
-def train_direct(recording: io.Recording, config: dict, *, source: str = "config", seed: int | None = 0) -> dict:
+def train_direct(recording: recordings.Recording, config: dict, *, source: str = "config", seed: int | None = 0) -> dict:
     """Fit a direct pipeline's learner on a recording's rate.
 
     Parameters
     ----------
-    recording : gyrocomp.io.Recording
+    recording : gyrocomp.recordings.Recording
         With ``temperature``.
     config : dict
         A loaded pipeline config with ``[pipeline] parallel = false``.
@@ -196,15 +196,6 @@ def segments(stack: np.ndarray, labels, denoise_settings) -> dict:
     return out
 
 
-def file_record(path) -> dict:
-    """The header ``inputs`` entry of an artefact file: its name and SHA-256."""
-    import hashlib
-    from pathlib import Path
-
-    path = Path(path)
-    return {"name": path.name, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
-
-
 def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, inputs, extra) -> dict:
     rate_cfg = rate_settings(config, source)
     pipeline = pipeline_settings(config, source)
@@ -237,7 +228,7 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
             "learner": learner.to_dict(),
         }
     settings = {**settings, "rate": settings_dict(rate_cfg), "model": model_table.to_dict()}
-    header = io.artefact_header(MODEL_SCHEMA, inputs=inputs, settings=settings, seed=seed)
+    header = artefacts.artefact_header(MODEL_SCHEMA, inputs=inputs, settings=settings, seed=seed)
     body = {
         "kind": pipeline.kind,
         "parallel": pipeline.parallel,

@@ -166,7 +166,7 @@ def profile_from_recording(recording) -> Profile:
 
     Parameters
     ----------
-    recording : gyrocomp.io.Recording
+    recording : gyrocomp.recordings.Recording
         Must have a ``temperature`` column.
 
     Raises

@@ -177,7 +177,7 @@ def run(config: SimConfig, *, temperature_from=None, progress=None) -> tuple[pd.
     ----------
     config : SimConfig
         From :func:`~gyrocomp.sim.model.load_sim_config`.
-    temperature_from : gyrocomp.io.Recording, optional
+    temperature_from : gyrocomp.recordings.Recording, optional
         Drive the run by this recording's measured temperature instead of
         the config's profile (its time axis, unless ``run.fs_hz`` differs).
     progress : callable, optional
@@ -187,10 +187,10 @@ def run(config: SimConfig, *, temperature_from=None, progress=None) -> tuple[pd.
     -------
     frame : pandas.DataFrame
     header : dict
-        :func:`gyrocomp.io.artefact_header` with the resolved settings, the
+        :func:`gyrocomp.artefacts.artefact_header` with the resolved settings, the
         seed, and the truth under ``"truth"``.
     """
-    from gyrocomp import io
+    from gyrocomp import artefacts
     from gyrocomp.sim.profile import profile_from_recording
 
     inputs = []
@@ -212,7 +212,7 @@ def run(config: SimConfig, *, temperature_from=None, progress=None) -> tuple[pd.
     settings = {name: settings_dict(getattr(config, name)) for name in ("run", "gyro", "profile", "reference")}
     if temperature_from is not None:
         settings["profile"] = {"recording": temperature_from.input_record()}
-    header = io.artefact_header(RECORDING_SCHEMA, inputs=inputs, settings=settings, seed=config.run.seed)
+    header = artefacts.artefact_header(RECORDING_SCHEMA, inputs=inputs, settings=settings, seed=config.run.seed)
     header["truth"] = truth
     return frame, header
 

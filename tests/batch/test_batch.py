@@ -25,14 +25,14 @@ N_GOOD = 4
 @pytest.fixture(scope="module")
 def logs(tmp_path_factory) -> Path:
     """Four simulated 1 Hz static logs (1 h each) and one truncated Parquet file."""
-    from gyrocomp import io, sim
+    from gyrocomp import artefacts, sim
 
     folder = tmp_path_factory.mktemp("logs")
     gyro = sim.load_sim_config(None, profile="soak-25").gyro
     profile = sim.load_sim_config(None, profile="soak-25").profile
     for seed in range(N_GOOD):
         frame, _ = sim.simulate(gyro, profile, fs_hz=1.0, seed=seed, duration_s=3600.0)
-        io.write_table(folder / f"unit{seed}.parquet", frame[["time", "rate", "temperature"]], {})
+        artefacts.write_table(folder / f"unit{seed}.parquet", frame[["time", "rate", "temperature"]], {})
     raw = (folder / "unit0.parquet").read_bytes()
     (folder / "truncated.parquet").write_bytes(raw[: len(raw) // 2])
     return folder

@@ -8,7 +8,7 @@ import pytest
 from typer.testing import CliRunner
 
 from gyrocomp.cli import app
-from gyrocomp.io import read_json, read_table
+from gyrocomp.artefacts import read_json, read_table
 
 
 @pytest.fixture

@@ -23,7 +23,7 @@ from gyrocomp.diagnose.detectability import (
     threshold,
 )
 from gyrocomp.diagnose.likelihood import NoiseModel, block_means
-from gyrocomp.io import recording_from_frame
+from gyrocomp.recordings import recording_from_frame
 from gyrocomp.sim import effects as shapes
 
 FS = 1.0

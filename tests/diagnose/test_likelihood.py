@@ -81,7 +81,7 @@ def test_periodic_grid_deviances_equal_the_direct_fits():
 
     from gyrocomp.diagnose import DiagnoseSettings, problems
     from gyrocomp.diagnose import select
-    from gyrocomp.io import recording_from_frame
+    from gyrocomp.recordings import recording_from_frame
 
     rng = np.random.default_rng(11)
     t = np.arange(4 * 3600, dtype=float)

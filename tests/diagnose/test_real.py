@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from gyrocomp.diagnose import diagnose
-from gyrocomp.io import recording_from_frame
+from gyrocomp.recordings import recording_from_frame
 
 
 @pytest.mark.slow

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from gyrocomp.diagnose import diagnose
-from gyrocomp.io import recording_from_frame
+from gyrocomp.recordings import recording_from_frame
 from gyrocomp.sim.model import (
     BiasInstability,
     GyroSettings,

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from gyrocomp import io
+from gyrocomp import recordings
 from gyrocomp.config import apply_overrides, load_config
 from gyrocomp.pipeline.train import train_direct
 
@@ -17,7 +17,7 @@ def _sample(name):
     path = SAMPLE / name
     if not path.exists():
         pytest.skip(f"sample_data/{name} absent")
-    return io.read_recording(path, require_temperature=True)
+    return recordings.read_recording(path, require_temperature=True)
 
 
 @pytest.fixture(scope="session")

@@ -7,7 +7,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from gyrocomp import io
+from gyrocomp import artefacts
 from gyrocomp.cli import app
 
 
@@ -17,8 +17,8 @@ def model_files(tmp_path_factory, cubic_model, sample_train):
     from gyrocomp.pipeline.train import train_direct
 
     folder = tmp_path_factory.mktemp("export")
-    io.write_json(folder / "cubic.json", cubic_model)
-    io.write_json(folder / "poly.json", train_direct(sample_train, load_config("polynomial"), source="polynomial", seed=0))
+    artefacts.write_json(folder / "cubic.json", cubic_model)
+    artefacts.write_json(folder / "poly.json", train_direct(sample_train, load_config("polynomial"), source="polynomial", seed=0))
     return folder
 
 

@@ -6,7 +6,7 @@ import dataclasses
 
 import pytest
 
-from gyrocomp import io
+from gyrocomp import artefacts, recordings
 from gyrocomp.sim import GyroSettings, ProfileSettings, simulate
 
 FS_HZ = 0.2
@@ -43,7 +43,7 @@ def oven(levels, hold_s=1500.0, start_c=25.0):
 
 def recording(levels, seed, *, hold_s=1500.0, name="run.parquet", gyro=None, start_c=25.0):
     frame, _ = simulate(gyro or quiet_gyro(), oven(levels, hold_s, start_c), fs_hz=FS_HZ, seed=seed, truth_columns=True)
-    rec = io.recording_from_frame(frame[["time", "rate", "temperature"]], name=name)
+    rec = recordings.recording_from_frame(frame[["time", "rate", "temperature"]], name=name)
     return rec, frame
 
 
@@ -74,6 +74,6 @@ def oven_files(tmp_path_factory, oven_pair):
     paths = []
     for rec in (train, test):
         path = folder / rec.name
-        io.write_table(path, rec.data, {})
+        artefacts.write_table(path, rec.data, {})
         paths.append(path)
     return paths

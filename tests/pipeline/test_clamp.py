@@ -75,7 +75,7 @@ def test_each_range_left_is_reported_by_how_much(polynomial, hot):
 
 def test_a_rate_outside_its_range_alone_is_reported(polynomial, oven_pair):
     """A recording inside the temperature range but with a faster ramp than training: today's code said nothing."""
-    from gyrocomp.io import recording_from_frame
+    from gyrocomp.recordings import recording_from_frame
 
     _, test, *_ = oven_pair
     frame = test.data.copy()

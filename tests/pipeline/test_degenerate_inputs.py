@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocomp import io
+from gyrocomp import recordings
 from gyrocomp.config import apply_overrides, load_config
 from gyrocomp.errors import InputError
 from gyrocomp.pipeline.train import train_direct
@@ -23,7 +23,7 @@ def _recording(temperature, name="soak.csv", fs_hz=1.0, seed=0):
     frame = pd.DataFrame(
         {"time": np.arange(n) / fs_hz, "rate": 0.01 + 1e-3 * rng.standard_normal(n), "temperature": temperature}
     )
-    return io.recording_from_frame(frame, name=name)
+    return recordings.recording_from_frame(frame, name=name)
 
 
 @pytest.mark.parametrize("config", ["polynomial", "elm"])

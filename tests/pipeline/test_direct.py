@@ -62,7 +62,7 @@ def test_retrained_on_its_own_compensated_run_learns_nothing(key, trained, oven_
     frame, _ = compensate(train, model, "full")
     again = train.data.copy()
     again["rate"] = frame["compensated"].to_numpy()
-    from gyrocomp.io import recording_from_frame
+    from gyrocomp.recordings import recording_from_frame
 
     rec = recording_from_frame(again, name="compensated.parquet")
     second = load_model(train_direct(rec, _config(key), seed=0))
@@ -97,7 +97,7 @@ def test_causal_mode_keeps_a_true_angular_rate(trained, oven_pair):
     signal, parts = evaluate.injected_signal(test.time_s, test.fs_hz, SignalSettings(sine_hz=(0.002, 0.01)))
     shifted = test.data.copy()
     shifted["rate"] = shifted["rate"] + signal
-    from gyrocomp.io import recording_from_frame
+    from gyrocomp.recordings import recording_from_frame
 
     a, _ = compensate(test, model, "causal")
     b, _ = compensate(recording_from_frame(shifted, name="s"), model, "causal")

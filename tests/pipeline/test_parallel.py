@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from gyrocomp import io
+from gyrocomp import artefacts, recordings
 from gyrocomp.cli import app
 from gyrocomp.pipeline import evaluate
 
@@ -43,17 +43,17 @@ def test_cli_chain_round_trips_and_compensates_a_held_out_run(tmp_path, oven_fil
     """Every artefact feeds the next stage; held-out drift falls >= 10x causal, >= 5x full."""
     train_path, test_path = oven_files
     model = _chain(tmp_path, train_path, config, extra)
-    obj = io.read_json(model, "gyrocomp.model")
+    obj = artefacts.read_json(model, "gyrocomp.model")
     assert obj["parallel"] and obj["kind"] == config
     assert obj["inputs"][0]["name"] == "components.parquet" and obj["settings"]["classify"]
-    test = io.read_recording(test_path)
+    test = recordings.read_recording(test_path)
     raw = evaluate.residual_drift(test.rate_dps, test.fs_hz)["std_deg_h"]
     for mode, factor in (("causal", 10), ("full", 5)):
         out = tmp_path / f"compensated_{mode}.parquet"
         _invoke(["compensate", test_path, model, "--mode", mode, "--out", out])
-        frame, header = io.read_table(out, "gyrocomp.compensation")
+        frame, header = artefacts.read_table(out, "gyrocomp.compensation")
         assert list(frame.columns) == ["time", "rate", "temperature", "drift_model", "compensated"]
-        sidecar = io.read_json(out.with_suffix(".json"), "gyrocomp.compensation")
+        sidecar = artefacts.read_json(out.with_suffix(".json"), "gyrocomp.compensation")
         assert sidecar["mode"] == mode and (mode == "causal" or sidecar["classes"])
         left = evaluate.residual_drift(frame["compensated"], test.fs_hz)["std_deg_h"]
         assert raw / left >= factor, f"{config} {mode}: {raw:.1f} -> {left:.2f} deg/h"
@@ -70,11 +70,11 @@ def test_full_pipeline_improves_arw_and_bias_instability_on_sample_like_data(mak
     paths = []
     for rec, name in ((train, "train.parquet"), (test, "test.parquet")):
         paths.append(tmp_path / name)
-        io.write_table(paths[-1], rec.data, {})
+        artefacts.write_table(paths[-1], rec.data, {})
     model = _chain(tmp_path, paths[0], "pe-lcd-anfis")
     out = tmp_path / "full.parquet"
     _invoke(["compensate", paths[1], model, "--mode", "full", "--out", out])
-    frame, _ = io.read_table(out, "gyrocomp.compensation")
+    frame, _ = artefacts.read_table(out, "gyrocomp.compensation")
     before = evaluate.allan_terms(test.rate_dps, test.fs_hz)
     after = evaluate.allan_terms(frame["compensated"].to_numpy(), test.fs_hz)
     assert after["arw"]["value"] < 0.5 * before["arw"]["value"]
@@ -119,7 +119,7 @@ def test_compensate_cli_warns_out_of_range_on_stderr(make_recording, tmp_path, o
     _invoke(["train", oven_files[0], "--config", "elm", "--out", model])
     hot, _ = recording([60, 40], seed=3, hold_s=600.0)
     path = tmp_path / "hot.parquet"
-    io.write_table(path, hot.data, {})
+    artefacts.write_table(path, hot.data, {})
     result = runner.invoke(app, ["compensate", str(path), str(model), "--out", str(tmp_path / "c.parquet")])
     assert result.exit_code == 0
     assert "warning" in result.output and "degC above" in result.output
@@ -139,7 +139,7 @@ def test_pipeline_writes_the_cli_artefacts_byte_for_byte(tmp_path, oven_files):
     pipe.mkdir()
     _invoke(["decompose", train_path, "--config", "pe-lcd-anfis", "--out", cli / "components.parquet"])
     _invoke(["classify", cli / "components.parquet", "--config", "pe-lcd-anfis", "--out", cli / "classes.json"])
-    rec = io.read_recording(train_path, require_temperature=True)
+    rec = recordings.read_recording(train_path, require_temperature=True)
     _, paths = decompose_and_classify(rec, load_config("pe-lcd-anfis"), "pe-lcd-anfis", pipe, seed=0, workers=1)
     for name in ("components.parquet", "components.json", "classes.json"):
         assert (pipe / name).read_bytes() == (cli / name).read_bytes(), name

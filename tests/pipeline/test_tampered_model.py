@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from gyrocomp import io
+from gyrocomp import artefacts
 from gyrocomp.cli import app
 from gyrocomp.config import apply_overrides, load_config
 from gyrocomp.errors import InputError
@@ -129,4 +129,4 @@ def test_read_json_refuses_non_finite_constants(tmp_path):
     path = tmp_path / "x.json"
     path.write_text('{"a": [1.0, NaN]}')
     with pytest.raises(InputError, match="x.json.*NaN"):
-        io.read_json(path)
+        artefacts.read_json(path)

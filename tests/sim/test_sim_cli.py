@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 from typer.testing import CliRunner
 
-from gyrocomp import io
+from gyrocomp import recordings
 from gyrocomp.cli import app
 
 runner = CliRunner()
@@ -22,7 +22,7 @@ def test_same_seed_same_bytes_different_seed_different_noise_same_truth(tmp_path
         result = _invoke(*SHORT, "--seed", str(seed), "--truth-columns", "--out", str(path))
         assert result.exit_code == 0, result.output
     assert paths[0].read_bytes() == paths[1].read_bytes()
-    a, c = (io.read_recording(p) for p in (paths[0], paths[2]))
+    a, c = (recordings.read_recording(p) for p in (paths[0], paths[2]))
     assert a.metadata["truth"] == c.metadata["truth"]
     assert a.metadata["seed"] == 4 and c.metadata["seed"] == 5
     assert a.metadata["schema"]["name"] == "gyrocomp.recording"
@@ -35,7 +35,7 @@ def test_default_run_is_the_paper_oven_test(tmp_path):
     out = tmp_path / "oven.parquet"
     result = _invoke("--out", str(out))
     assert result.exit_code == 0, result.output
-    rec = io.read_recording(out, require_temperature=True)
+    rec = recordings.read_recording(out, require_temperature=True)
     assert rec.metadata["settings"]["profile"]["levels_c"][0] == 60.0
     temperature = rec.temperature_c
     assert temperature.max() > 59.5 and temperature.min() < -39.5
@@ -64,7 +64,7 @@ def test_profile_by_name_and_by_recording_and_csv_output(tmp_path):
     out = tmp_path / "driven.parquet"
     result = _invoke("--profile", str(driver), "--truth-columns", "--out", str(out))
     assert result.exit_code == 0, result.output
-    rec = io.read_recording(out)
+    rec = recordings.read_recording(out)
     assert np.allclose(rec.data.truth_temperature, frame.temperature, rtol=0, atol=0.2)  # the housing: the reading smoothed over 60 s
     assert rec.metadata["inputs"][0]["name"] == "driver.csv"
 
@@ -73,5 +73,5 @@ def test_reference_rate_column(tmp_path):
     out = tmp_path / "turntable.parquet"
     result = _invoke(*SHORT, "--set", 'reference.kind="steps"', "--out", str(out))
     assert result.exit_code == 0, result.output
-    rec = io.read_recording(out)
+    rec = recordings.read_recording(out)
     assert set(np.unique(rec.data.reference_rate)) == {-10.0, 0.0, 10.0}

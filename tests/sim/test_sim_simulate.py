@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from numpy.testing import assert_allclose
 
-from gyrocomp import io, sim
+from gyrocomp import artefacts, recordings, sim
 from gyrocomp.config import CONFIG_DIR
 from gyrocomp.errors import InputError
 from gyrocomp.sim import model
@@ -98,7 +98,7 @@ def test_measured_temperature_is_noisy_and_quantised_housing():
 
 def test_profile_from_recording_drives_the_run():
     driver, _ = _run()
-    recording = io.recording_from_frame(driver[["time", "rate", "temperature"]], name="driver.csv")
+    recording = recordings.recording_from_frame(driver[["time", "rate", "temperature"]], name="driver.csv")
     profile = sim.profile_from_recording(recording)
     frame, truth = sim.simulate(sim.GyroSettings(), profile, fs_hz=None, seed=1, truth_columns=True)
     assert_allclose(frame.temperature, driver.temperature)
@@ -107,7 +107,7 @@ def test_profile_from_recording_drives_the_run():
     resampled, _ = sim.simulate(sim.GyroSettings(), profile, fs_hz=1.0, seed=1)
     assert len(resampled) == int(driver.time.iloc[-1]) + 1
     with pytest.raises(InputError, match="temperature"):
-        sim.profile_from_recording(io.recording_from_frame(driver[["time", "rate"]], name="x.csv"))
+        sim.profile_from_recording(recordings.recording_from_frame(driver[["time", "rate"]], name="x.csv"))
 
 
 def test_truth_has_every_effect_with_units():
@@ -162,10 +162,10 @@ def test_sample_data_is_what_the_sample_configs_generate(tmp_path):
     for name in ("oven_train", "oven_test"):
         frame, header = sim.run(sim.load_sim_config(CONFIG_DIR / "sample" / f"{name}.toml"))
         shipped = CONFIG_DIR.parent / "sample_data" / f"{name}.parquet"
-        shipped_frame, shipped_header = io.read_table(shipped, "gyrocomp.recording")
+        shipped_frame, shipped_header = artefacts.read_table(shipped, "gyrocomp.recording")
         # Values and header, not bytes: the Parquet writer's version string may differ between machines.
         pd.testing.assert_frame_equal(shipped_frame, frame, check_exact=True, obj=f"run `make sample-data` ({name})")
-        assert shipped_header == json.loads(json.dumps(io.jsonable(header)))
+        assert shipped_header == json.loads(json.dumps(artefacts.jsonable(header)))
 
 
 def test_a_measured_profile_keeps_the_configured_arw():
@@ -177,7 +177,7 @@ def test_a_measured_profile_keeps_the_configured_arw():
     import dataclasses
     from pathlib import Path
 
-    from gyrocomp import allan, io
+    from gyrocomp import allan, recordings
     from gyrocomp.sim import GyroSettings, simulate
     from gyrocomp.sim.profile import profile_from_recording
 
@@ -187,7 +187,7 @@ def test_a_measured_profile_keeps_the_configured_arw():
     g = GyroSettings()
     off = {name: dataclasses.replace(getattr(g, name), enabled=False) for name in ("bias_instability", "rate_random_walk", "warmup")}
     g = dataclasses.replace(g, **off)
-    frame, _ = simulate(g, profile_from_recording(io.read_recording(path, require_temperature=True)), fs_hz=None, seed=1)
+    frame, _ = simulate(g, profile_from_recording(recordings.read_recording(path, require_temperature=True)), fs_hz=None, seed=1)
     terms = allan.analyse(frame["rate"].to_numpy(), 1.0).terms
     assert terms["arw"]["value"] == pytest.approx(g.arw, rel=0.05)
     assert terms["arw"]["readoff"] == pytest.approx(g.arw, rel=0.05)

@@ -1,0 +1,331 @@
+"""Artefacts out: atomic writes, the traceability header, and the one file hash.
+
+Every artefact is written atomically (a temporary file in the target's
+folder, then :func:`os.replace`), so a failed or killed run leaves the
+previous file or none, never a half-written one. Each carries the header
+made by :func:`artefact_header`: schema name and version, gyrocomp version,
+the inputs' SHA-256 (:func:`file_sha256`), the settings and the seed, and
+no wall-clock time, so the same inputs and seed give the same bytes.
+Reading recordings is :mod:`gyrocomp.recordings`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import math
+import os
+import re
+import sys
+import tempfile
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, BinaryIO, Iterator
+
+import numpy as np
+
+from gyrocomp import __version__
+from gyrocomp.errors import InputError, SchemaError
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "file_sha256",
+    "file_record",
+    "write_table",
+    "read_table",
+    "write_json",
+    "read_json",
+    "atomic_path",
+    "artefact_header",
+    "check_header",
+    "parquet_header",
+    "open_input",
+    "read_bytes",
+    "jsonable",
+]
+
+SCHEMA_VERSION = "1.0"
+
+METADATA_KEY = b"gyrocomp"
+"""Key of the artefact header in a Parquet file's key-value metadata."""
+
+
+def file_sha256(source: str | os.PathLike | bytes) -> str:
+    """SHA-256 (hex) of a file's bytes, streamed, or of `source` itself when it is bytes.
+
+    The one hash of every ``inputs`` entry, batch manifest and up-to-date
+    check, so the same file always gets the same digest.
+
+    Raises
+    ------
+    InputError
+        The file is missing, a folder or unreadable.
+    """
+    if isinstance(source, (bytes, bytearray, memoryview)):
+        return hashlib.sha256(source).hexdigest()
+    with open_input(os.fspath(source)) as fh:
+        return hashlib.file_digest(fh, "sha256").hexdigest()
+
+
+def file_record(path: str | os.PathLike) -> dict:
+    """The ``inputs`` entry of an artefact header for a file: its name and :func:`file_sha256`."""
+    return {"name": Path(path).name, "sha256": file_sha256(path)}
+
+
+def write_table(path: str | os.PathLike, frame: pd.DataFrame, header: dict) -> None:
+    """Write a table atomically: Parquet or CSV by extension, ``-`` is CSV on stdout.
+
+    The header (see :func:`artefact_header`) goes into the Parquet file's
+    key-value metadata under ``gyrocomp``; a CSV table carries no header, so
+    write Parquet wherever traceability matters.
+    """
+    if str(path) == "-":
+        frame.to_csv(sys.stdout, index=False, float_format=None)
+        sys.stdout.flush()
+        return
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    suffix = Path(path).suffix.lower()
+    if suffix not in (".csv", ".txt", ".parquet", ".pq"):
+        raise InputError(f"{path}: unknown extension {suffix!r}; use .csv or .parquet")
+    with atomic_path(path) as tmp:
+        if suffix in (".csv", ".txt"):
+            frame.to_csv(tmp, index=False)
+        else:
+            table = pa.Table.from_pandas(frame, preserve_index=False)
+            meta = {METADATA_KEY: json.dumps(jsonable(header), sort_keys=True).encode()}
+            table = table.replace_schema_metadata(meta)
+            pq.write_table(table, tmp)
+
+
+def read_table(path: str | os.PathLike, schema: str) -> tuple[pd.DataFrame, dict]:
+    """Read a Parquet artefact written by :func:`write_table` and check its schema.
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+    header : dict
+        The artefact header; :func:`check_header` has accepted it.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    name, raw = read_bytes(path)
+    if Path(name).suffix.lower() not in (".parquet", ".pq"):
+        raise InputError(f"{name}: expected a .parquet artefact")
+    if not raw:
+        raise InputError(f"{name}: file is empty")
+    try:
+        table = pq.read_table(pa.BufferReader(raw))
+    except (pa.ArrowInvalid, OSError) as err:
+        raise InputError(f"{name}: not a readable Parquet file ({err})") from None
+    header = parquet_header(name, table.schema.metadata)
+    check_header(header, schema, name)
+    return table.to_pandas(), header
+
+
+def write_json(path: str | os.PathLike, obj: Any) -> None:
+    """Write JSON atomically (``-`` writes to stdout); NaN becomes ``null``."""
+    text = json.dumps(jsonable(obj), indent=2, allow_nan=False) + "\n"
+    if str(path) == "-":
+        sys.stdout.write(text)
+        sys.stdout.flush()
+        return
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(text, encoding="utf-8")
+
+
+def read_json(path: str | os.PathLike, schema: str | None = None) -> dict:
+    """Read a JSON artefact; with `schema`, check its header (:func:`check_header`)."""
+    name, raw = read_bytes(path)
+    try:
+        obj = json.loads(raw.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite_float)
+    except (UnicodeDecodeError, ValueError) as err:  # JSONDecodeError is a ValueError
+        line = getattr(err, "lineno", None) or _line_of(raw, getattr(err, "token", None))
+        at = f" line {line}" if line else ""
+        raise InputError(f"{name}{at}: not valid JSON ({err.args[0] if err.args else err})") from None
+    except RecursionError:
+        raise InputError(f"{name}: not valid JSON (nested too deeply)") from None
+    if not isinstance(obj, dict):
+        raise InputError(f"{name}: expected a JSON object at the top level")
+    if schema is not None:
+        check_header(obj, schema, name)
+    return obj
+
+
+class _BadNumber(ValueError):
+    """A number JSON cannot hold; `token` is its text, to find its line."""
+
+    def __init__(self, token: str, why: str):
+        super().__init__(f"{token} {why}")
+        self.token = token
+
+
+def _no_constant(text: str):
+    """JSON has no NaN or Infinity; Python's reader would accept them."""
+    raise _BadNumber(text, "is not a JSON number")
+
+
+def _finite_float(text: str) -> float:
+    """A JSON number that overflows a double (``1e999``) is refused, not read as infinity."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise _BadNumber(text, "overflows a double")
+    return value
+
+
+def _line_of(raw: bytes, token: str | None) -> int | None:
+    """Line (1-based) of the first bare `token` in `raw`, or None."""
+    if not token:
+        return None
+    found = re.search(rb'(?<![\w."])' + re.escape(token.encode()) + rb'(?![\w."])', raw)
+    return raw.count(b"\n", 0, found.start()) + 1 if found else None
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[str]:
+    """Yield a temporary path beside `path`; on success rename it onto `path`.
+
+    The parent folder is created. If the body raises, the temporary file is
+    removed and `path` is left as it was.
+    """
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    os.close(fd)
+    try:
+        yield tmp
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def artefact_header(
+    schema: str,
+    *,
+    inputs: list[dict] | None = None,
+    settings: dict | None = None,
+    seed: int | None = None,
+    version: str = SCHEMA_VERSION,
+) -> dict:
+    """The traceability header every artefact starts with.
+
+    Parameters
+    ----------
+    schema : str
+        Artefact kind, e.g. ``"gyrocomp.allan"``.
+    inputs : list of dict
+        ``{"name", "sha256"}`` per input
+        (:meth:`gyrocomp.recordings.Recording.input_record`).
+    settings : dict
+        The fully resolved settings.
+    seed : int or None
+        The seed of every random step.
+    version : str
+        ``"major.minor"``; readers refuse a newer major.
+    """
+    return {
+        "schema": {"name": schema, "version": version},
+        "gyrocomp_version": __version__,
+        "inputs": list(inputs or []),
+        "settings": settings or {},
+        "seed": seed,
+    }
+
+
+def check_header(obj: dict, schema: str, name: str, supported_major: int | None = None) -> None:
+    """Refuse an artefact of a foreign schema or of a newer major version.
+
+    Raises
+    ------
+    SchemaError
+    """
+    major_supported = supported_major or int(SCHEMA_VERSION.split(".")[0])
+    info = obj.get("schema") if isinstance(obj, dict) else None
+    if not isinstance(info, dict) or "name" not in info or "version" not in info:
+        raise SchemaError(f"{name}: not a gyrocomp artefact (no `schema` name and version)")
+    if info["name"] != schema:
+        raise SchemaError(f"{name}: is a {info['name']!r} artefact, expected {schema!r}")
+    try:
+        major = int(str(info["version"]).split(".")[0])
+    except ValueError:
+        raise SchemaError(f"{name}: unreadable schema version {info['version']!r}") from None
+    if major > major_supported:
+        raise SchemaError(
+            f"{name}: schema {schema} version {info['version']} is newer than this "
+            f"gyrocomp ({__version__}) reads (major {major_supported}); upgrade gyrocomp"
+        )
+
+
+def parquet_header(name: str, meta: dict | None) -> dict:
+    """The artefact header stored under ``gyrocomp`` in Parquet key-value metadata, else {}."""
+    meta = meta or {}
+    if METADATA_KEY not in meta:
+        return {}
+    try:
+        return json.loads(meta[METADATA_KEY])
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise InputError(f"{name}: corrupted gyrocomp metadata") from None
+
+
+@contextlib.contextmanager
+def open_input(name: str) -> Iterator[BinaryIO]:
+    """``open(name, "rb")``, its failures as one-line :class:`InputError` naming the file."""
+    try:
+        fh = open(name, "rb")
+    except FileNotFoundError:
+        raise InputError(f"{name}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{name}: is a directory, expected a file") from None
+    except PermissionError:
+        raise InputError(f"{name}: permission denied") from None
+    with fh:
+        yield fh
+
+
+def read_bytes(path: str | os.PathLike) -> tuple[str, bytes]:
+    """Name and bytes of a file (``-`` reads standard input)."""
+    if str(path) == "-":
+        return "-", sys.stdin.buffer.read()
+    name = os.fspath(path)
+    with open_input(name) as fh:
+        return name, fh.read()
+
+
+def jsonable(obj: Any) -> Any:
+    """Convert numpy scalars and arrays, paths and tuples to plain JSON values.
+
+    Non-finite floats become ``None`` (JSON has no NaN).
+    """
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, (np.bool_, bool)):
+        return bool(obj)
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        value = float(obj)
+        return value if math.isfinite(value) else None
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    return obj
+
+
+def _umask() -> int:
+    """The process umask (reading it means setting it; it is set straight back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask

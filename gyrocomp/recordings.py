@@ -1,0 +1,1070 @@
+"""Recordings in: reading, unit conversion and validation.
+
+A *recording* is a table of ``time`` [s], one or more sensor axes (angular
+rate in deg/s, or acceleration in m/s^2), kept under their own column
+names, and, where the command needs it, one or more temperatures [degC].
+It is read from CSV (compressed by extension: ``.gz``, ``.bz2``, ``.xz``,
+``.zst``, ``.zip``; any separator and decimal mark), Parquet, a PX4 ULog
+(``.ulg``) or an ArduPilot DataFlash log (``.bin``, see
+:mod:`gyrocomp.flightlogs`); ``-`` reads CSV from standard input. Which
+columns are which, and their units, is a :class:`ColumnSpec`.
+
+Everything wrong with a recording raises :class:`~gyrocomp.errors.InputError`
+naming the file, and the line (CSV) or row (Parquet, logs) and column:
+nothing is guessed silently. A time column without a declared unit is read
+as seconds only when the sample rate and span that implies are those of a
+gyro log (:class:`TimeLimits`); otherwise the message names the likely
+unit. Duplicate time stamps are refused unless merged (``dedupe``). A
+recording with gaps is a list of :attr:`Recording.segments`, never
+interpolated unless asked (``resample``), and then :attr:`Recording.notes`
+says what was filled.
+
+For a command that handles one axis, :meth:`Recording.axis` gives that axis
+as a one-axis recording whose column is ``rate``; :meth:`Recording.split`
+gives one recording per segment.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import fnmatch
+import io as _stdio
+import json
+import math
+import os
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable, Mapping, Sequence
+
+import numpy as np
+
+from gyrocomp.artefacts import file_sha256, parquet_header
+from gyrocomp.errors import InputError
+
+if TYPE_CHECKING:  # pandas is imported where a function needs it: the Parquet path of a recording never does
+    import pandas as pd
+
+__all__ = [
+    "ColumnSpec",
+    "Channel",
+    "Recording",
+    "TimeLimits",
+    "read_recording",
+    "recording_from_frame",
+    "RATE_UNITS",
+    "ACCELERATION_UNITS",
+    "TIME_UNITS",
+]
+
+STANDARD_GRAVITY = 9.80665
+"""m/s^2 per g (CGPM 1901, the value of g_n in the SI brochure)."""
+
+RATE_UNITS = {"deg/s": 1.0, "deg/h": 1.0 / 3600.0, "rad/s": 180.0 / math.pi}
+"""Factors that convert an angular-rate unit to deg/s."""
+
+ACCELERATION_UNITS = {"m/s^2": 1.0, "m/s2": 1.0, "g": STANDARD_GRAVITY}
+"""Factors that convert an acceleration unit to m/s^2."""
+
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "datetime": None}
+"""Factors that convert a numeric time unit to seconds; ``datetime`` is parsed by pandas."""
+
+TEMPERATURE_UNITS = ("degC", "K")
+
+_SEPARATOR_WORDS = {"\\t": "\t", "tab": "\t", "\\s+": "\\s+"}
+"""Separators spelled out as words or escapes on a command line."""
+
+COMPRESSIONS = (".gz", ".bz2", ".xz", ".zst", ".zip")
+"""Extensions of compressed CSV, decompressed by pandas."""
+
+_PLAUSIBLE_DEGC = (-100.0, 200.0)
+"""Temperatures outside this range are refused as a probable unit mistake."""
+
+
+def _entries(value: str | Sequence[str]) -> tuple[str, ...]:
+    """The comma-separated entries of an option (or the items of a sequence), stripped."""
+    items = value.split(",") if isinstance(value, str) else list(value)
+    return tuple(s.strip() for s in items if s.strip())
+
+
+@dataclasses.dataclass(frozen=True)
+class TimeLimits:
+    """Sample rates and spans a gyro log has (``configs/recordings.toml``, ``[time]``).
+
+    A time column read as seconds without ``--time-unit`` must give a
+    sample rate in [`min_fs_hz`, `max_fs_hz`] and a span of at most
+    `max_span_days`; otherwise it is refused, naming the unit that would
+    fit (a µs ``timestamp`` read as seconds gives 1e-4 Hz at 100 Hz).
+
+    Parameters
+    ----------
+    min_fs_hz : float, default=0.01
+        One sample per 100 s: slower than any rate logger.
+    max_fs_hz : float, default=1e5
+        Above the fastest MEMS gyro output data rate (32 kHz).
+    max_span_days : float, default=30
+        Longer than any oven or Allan run (12-72 h).
+    typical_fs_hz : float, default=100
+        When several units would fit, the one giving the rate nearest to
+        this (in decades) is named first.
+    """
+
+    min_fs_hz: float = 0.01
+    max_fs_hz: float = 1e5
+    max_span_days: float = 30.0
+    typical_fs_hz: float = 100.0
+
+
+@dataclasses.dataclass(frozen=True)
+class ColumnSpec:
+    """How to find, parse and convert the columns of a recording.
+
+    Parameters
+    ----------
+    time : str, default="time"
+        Name of the time column.
+    rate : str, default="rate"
+        The sensor axes: one name, comma-separated names (``"gx,gy,gz"``)
+        or shell globs (``"gyro_*"``, ``"IMU_0_Gyr?"``), matched in the
+        file's column order; the time and temperature columns never match a
+        glob. The axes keep these names in every output.
+    temperature : str, default="temperature"
+        Temperature column(s), same syntax; the first is *the* temperature
+        (column ``temperature`` of the recording), any others keep their
+        names.
+    time_unit : {None, "s", "ms", "us", "ns", "datetime"}, default=None
+        Unit of the time column. ``None`` reads numbers as seconds, refused
+        when implausible (:class:`TimeLimits`), and ISO 8601 text as
+        datetimes; an explicit unit skips the plausibility check.
+    rate_unit : str, default="deg/s"
+        Unit of the axes: an angular rate (``deg/s``, ``deg/h``, ``rad/s``,
+        converted to deg/s) or an acceleration (``m/s^2``, ``g``, converted
+        to m/s^2). One unit for every axis, or comma-separated, one per
+        entry of `rate` (``"deg/s,g"`` with ``rate="gyro_*,acc_*"``).
+    temperature_unit : {"degC", "K"}, default="degC"
+        Unit of the temperature column(s).
+    sep : str, default=","
+        CSV field separator (``";"``, a tab as ``"\\t"`` or ``"tab"``,
+        ``"\\s+"`` for runs of blanks, ...).
+    decimal : str, default="."
+        CSV decimal mark (``","`` for decimal-comma files).
+    dedupe : {None, "first", "mean"}, default=None
+        Duplicate time stamps: refused (``None``), or merged keeping the
+        first row or the mean of the rows.
+    """
+
+    time: str = "time"
+    rate: str = "rate"
+    temperature: str = "temperature"
+    time_unit: str | None = None
+    rate_unit: str = "deg/s"
+    temperature_unit: str = "degC"
+    sep: str = ","
+    decimal: str = "."
+    dedupe: str | None = None
+
+    def __post_init__(self):
+        for option, value, choices in (
+            ("time unit", self.time_unit, (None, *TIME_UNITS)),
+            ("temperature unit", self.temperature_unit, TEMPERATURE_UNITS),
+            ("dedupe", self.dedupe, (None, "first", "mean")),
+        ):
+            if value not in choices:
+                raise InputError(f"unknown {option} {value!r}; choose one of {', '.join(c for c in choices if c)}")
+        for unit in self.rate_units:
+            if unit not in RATE_UNITS and unit not in ACCELERATION_UNITS:
+                raise InputError(f"unknown rate unit {unit!r}; choose one of {', '.join([*RATE_UNITS, *ACCELERATION_UNITS])}")
+        if len(self.rate_units) not in (1, len(self.rate_patterns)):
+            raise InputError(
+                f"--rate-unit {self.rate_unit!r}: give one unit, or one per --rate-col entry ({len(self.rate_patterns)})"
+            )
+        if not self.rate_patterns:
+            raise InputError("--rate-col: no column named")
+        if len(self.sep) != 1 and self.sep not in _SEPARATOR_WORDS:
+            raise InputError(f"--sep {self.sep!r}: give one character, or one of {', '.join(_SEPARATOR_WORDS)}")
+        if len(self.decimal) != 1 or self.decimal == self.sep:
+            raise InputError(f"--decimal {self.decimal!r}: give one character other than the separator")
+
+    @property
+    def rate_patterns(self) -> tuple[str, ...]:
+        """The entries of `rate` (names or globs)."""
+        return _entries(self.rate)
+
+    @property
+    def rate_units(self) -> tuple[str, ...]:
+        """The entries of `rate_unit`."""
+        return _entries(self.rate_unit)
+
+    @property
+    def temperature_patterns(self) -> tuple[str, ...]:
+        """The entries of `temperature` (names or globs)."""
+        return _entries(self.temperature)
+
+
+@dataclasses.dataclass(frozen=True)
+class Channel:
+    """One sensor axis of a recording.
+
+    Parameters
+    ----------
+    name : str
+        The axis' name: its column in the file, kept in every output.
+    column : str
+        Its column in :attr:`Recording.data`: `name`, or ``rate`` in the
+        one-axis recording of :meth:`Recording.axis`.
+    quantity : {"angular_rate", "acceleration"}
+    unit : {"deg/s", "m/s^2"}
+        Unit of the recording's values.
+    file_unit : str
+        Unit in the file, converted to `unit`.
+    """
+
+    name: str
+    column: str
+    quantity: str
+    unit: str
+    file_unit: str
+
+
+class Recording:
+    """A validated recording.
+
+    Parameters
+    ----------
+    data : pandas.DataFrame or mapping of str to numpy.ndarray
+        ``time`` [s] (strictly increasing, uniform within the tolerance in
+        each segment), one column per axis (:attr:`axes`), ``temperature``
+        [degC] when present (and any further temperatures by name), and any
+        further numeric columns of the file unchanged, as a frame or as one
+        1-D array per column (kept as given, not copied).
+    name : str
+        The file's name (``"-"`` for standard input), used in messages.
+    sha256 : str
+        SHA-256 of the file's bytes.
+    fs_hz : float
+        Sample rate, from the median sampling interval.
+    metadata : dict, optional
+        The ``gyrocomp`` metadata of a Parquet file written by this tool
+        (the simulator stores its truth there), else empty.
+    axes : sequence of Channel, optional
+        The sensor axes; default one angular rate in column ``rate``.
+    temperatures : sequence of str, optional
+        Temperature columns, ``temperature`` first; default ``temperature``
+        when the data has it.
+    segments : sequence of slice, optional
+        Row ranges sampled without a gap (default: one, all rows).
+    notes : sequence of str, optional
+        What reading changed (merged duplicates, filled gaps), one line each.
+    time_origin : str, optional
+        What ``time`` = 0 was in the file when its time stamps were not in
+        seconds: an ISO 8601 date and time, or the first stamp and its unit
+        (``"1700000000000000 us"``).
+
+    Notes
+    -----
+    A recording built from arrays makes its :attr:`data` frame (and
+    imports pandas) only when asked; from then on the frame is the
+    recording's content, so changes made through it are what
+    :meth:`column` and the properties return.
+    """
+
+    def __init__(
+        self,
+        data: pd.DataFrame | Mapping[str, np.ndarray],
+        name: str,
+        sha256: str,
+        fs_hz: float,
+        metadata: dict | None = None,
+        *,
+        axes: Sequence[Channel] | None = None,
+        temperatures: Sequence[str] | None = None,
+        segments: Sequence[slice] | None = None,
+        notes: Sequence[str] = (),
+        time_origin: str | None = None,
+    ):
+        self._frame = None
+        self._arrays = None
+        if isinstance(data, Mapping):
+            self._arrays = dict(data)
+        else:
+            self._frame = data
+        self.name = name
+        self.sha256 = sha256
+        self.fs_hz = fs_hz
+        self.metadata = {} if metadata is None else metadata
+        self.axes = tuple(axes) if axes is not None else (Channel("rate", "rate", "angular_rate", "deg/s", "deg/s"),)
+        if temperatures is None:
+            temperatures = ("temperature",) if "temperature" in self.columns else ()
+        self.temperatures = tuple(temperatures)
+        self.segments = tuple(segments) if segments is not None else (slice(0, self.n_samples),)
+        self.notes = tuple(notes)
+        self.time_origin = time_origin
+
+    def __repr__(self) -> str:
+        return (
+            f"Recording(name={self.name!r}, axes={self.axis_names!r}, fs_hz={self.fs_hz!r}, "
+            f"segments={len(self.segments)})"
+        )
+
+    @property
+    def data(self) -> pd.DataFrame:
+        """The columns as a pandas DataFrame (built once, sharing the arrays' memory)."""
+        if self._frame is None:
+            import pandas as pd
+
+            self._frame = pd.DataFrame(self._arrays, copy=False)  # one block per column: no 2-D stacking copy
+            self._arrays = None
+        return self._frame
+
+    @data.setter
+    def data(self, frame: pd.DataFrame) -> None:
+        self._frame, self._arrays = frame, None
+
+    @property
+    def columns(self) -> list[str]:
+        """Column names, in order."""
+        if self._frame is not None:
+            return [str(c) for c in self._frame.columns]
+        return list(self._arrays)
+
+    @property
+    def n_samples(self) -> int:
+        """Number of rows."""
+        return len(self.column("time"))
+
+    def column(self, name: str) -> np.ndarray:
+        """One column as a NumPy array (a view, not a copy, where possible).
+
+        Raises
+        ------
+        KeyError
+            No such column.
+        """
+        if self._frame is not None:
+            return self._frame[name].to_numpy()
+        return self._arrays[name]
+
+    @property
+    def axis_names(self) -> tuple[str, ...]:
+        """The axes' names, in order (the names outputs keep)."""
+        return tuple(a.name for a in self.axes)
+
+    def axis(self, name: str | None = None) -> Recording:
+        """One axis as a one-axis recording, its values in column ``rate``.
+
+        Time, temperatures, segments, notes and the other non-axis columns
+        are shared (no copy); :attr:`axes` holds the one channel, still
+        under its own `name`.
+
+        Parameters
+        ----------
+        name : str, optional
+            The axis; may be omitted when the recording has one.
+
+        Raises
+        ------
+        InputError
+            No such axis, or several and no `name`.
+        """
+        if name is None:
+            if len(self.axes) != 1:
+                raise InputError(
+                    f"{self.name}: {len(self.axes)} axes ({', '.join(self.axis_names)}); "
+                    f"this command takes one: pick it with --rate-col"
+                )
+            channel = self.axes[0]
+        else:
+            found = [a for a in self.axes if a.name == name]
+            if not found:
+                raise InputError(f"{self.name}: no axis {name!r}; the axes are {', '.join(self.axis_names)}")
+            channel = found[0]
+        others = {a.column for a in self.axes}
+        arrays = {"time": self.column("time"), "rate": self.column(channel.column)}
+        for c in self.columns:
+            if c not in others and c not in arrays:
+                arrays[c] = self.column(c)
+        return self._like(arrays, axes=(dataclasses.replace(channel, column="rate"),))
+
+    def split(self) -> list[Recording]:
+        """One recording per segment (rows shared, not copied), in time order."""
+        if len(self.segments) == 1:
+            return [self]
+        parts = []
+        for seg in self.segments:
+            arrays = {c: self.column(c)[seg] for c in self.columns}
+            parts.append(self._like(arrays, segments=(slice(0, seg.stop - seg.start),)))
+        return parts
+
+    @property
+    def time_s(self) -> np.ndarray:
+        return self.column("time")
+
+    @property
+    def rate_dps(self) -> np.ndarray:
+        """The values of the recording's one axis (see :meth:`axis`)."""
+        if len(self.axes) == 1:
+            return self.column(self.axes[0].column)
+        return self.axis().column("rate")  # refuses several axes, naming them
+
+    @property
+    def temperature_c(self) -> np.ndarray | None:
+        if "temperature" not in self.columns:
+            return None
+        return self.column("temperature")
+
+    def input_record(self) -> dict:
+        """The ``inputs`` entry of an artefact header for this recording."""
+        return {"name": Path(self.name).name, "sha256": self.sha256}
+
+    def _like(self, arrays: dict, **changes) -> Recording:
+        kwargs = dict(
+            axes=self.axes,
+            temperatures=[t for t in self.temperatures if t in arrays],
+            segments=self.segments,
+            notes=self.notes,
+            time_origin=self.time_origin,
+        )
+        kwargs.update(changes)
+        return Recording(arrays, self.name, self.sha256, self.fs_hz, self.metadata, **kwargs)
+
+
+def read_recording(
+    path: str | os.PathLike,
+    columns: ColumnSpec = ColumnSpec(),
+    *,
+    require_temperature: bool = False,
+    min_samples: int = 2,
+    jitter_tolerance: float = 0.5,
+    resample: bool = False,
+    allow_gaps: bool = False,
+    usecols: Sequence[str] | None = None,
+    limits: TimeLimits = TimeLimits(),
+) -> Recording:
+    """Read and validate a recording from CSV, Parquet, ULog or DataFlash.
+
+    Parameters
+    ----------
+    path : path-like or "-"
+        ``.csv`` (``.txt``; also ``.csv.gz``, ``.csv.bz2``, ``.csv.xz``,
+        ``.csv.zst``, ``.csv.zip``), ``.parquet`` (``.pq``), ``.ulg`` or
+        ``.bin``; ``"-"`` reads CSV from stdin.
+    columns : ColumnSpec
+        Column names, units and CSV format.
+    require_temperature : bool
+        Refuse a recording without the temperature column.
+    min_samples : int
+        Fewest samples the calling command can work with.
+    jitter_tolerance : float
+        Largest allowed deviation of a sampling interval from the median
+        interval, as a fraction of the median. A longer interval is a gap.
+    resample : bool
+        Instead of refusing a jittered or gapped time axis, interpolate every
+        column linearly onto a uniform grid at the median interval;
+        :attr:`Recording.notes` says how many gaps were filled and the
+        longest.
+    allow_gaps : bool
+        Accept gaps: the recording becomes several :attr:`Recording.segments`
+        (for commands that handle them); otherwise a gap is refused.
+    usecols : sequence of str, optional
+        File columns (names or globs) to load beside the time and the axes,
+        e.g. the temperature; the others are never read (Parquet) or parsed
+        (CSV). Default: all.
+        When a column is missing, the whole file is read so that the error
+        names every column it has.
+    limits : TimeLimits
+        The plausible sample rates and spans of a time column in seconds.
+
+    Returns
+    -------
+    Recording
+
+    Raises
+    ------
+    InputError
+        Missing, empty or header-only file; missing column; non-numeric,
+        NaN or infinite cell; time not strictly increasing or duplicated;
+        implausible time base; jitter or gap beyond the tolerance; fewer than
+        `min_samples` samples; temperature outside a plausible range for the
+        declared unit.
+    """
+    name = "-" if str(path) == "-" else os.fspath(path)
+    kind = _kind(name)
+    if kind in ("ulog", "dataflash"):
+        from gyrocomp import flightlogs
+
+        frame, where = flightlogs.read_log(name, kind), ("row", 1)
+        columns = flightlogs.default_columns(columns, frame)
+        sha, metadata = file_sha256(name), {}
+    else:
+        frame, metadata, sha, where = _read_table(name, kind, columns, usecols)
+    return recording_from_frame(
+        frame,
+        name=name,
+        sha256=sha,
+        columns=columns,
+        require_temperature=require_temperature,
+        min_samples=min_samples,
+        jitter_tolerance=jitter_tolerance,
+        resample=resample,
+        allow_gaps=allow_gaps,
+        metadata=metadata,
+        limits=limits,
+        _where=where,
+        _owned=True,
+    )
+
+
+def recording_from_frame(
+    frame: pd.DataFrame | Mapping[str, np.ndarray],
+    *,
+    name: str = "<table>",
+    sha256: str | None = None,
+    columns: ColumnSpec = ColumnSpec(),
+    require_temperature: bool = False,
+    min_samples: int = 2,
+    jitter_tolerance: float = 0.5,
+    resample: bool = False,
+    allow_gaps: bool = False,
+    metadata: dict | None = None,
+    limits: TimeLimits = TimeLimits(),
+    _where: tuple[str, int] = ("row", 1),
+    _owned: bool = False,
+) -> Recording:
+    """Validate an in-memory table as a recording (see :func:`read_recording`).
+
+    `frame` is a pandas DataFrame or a mapping of column name to 1-D
+    integer or float NumPy array (validated without importing pandas).
+    `sha256` defaults to the hash of the table's CSV form. Time and axes are
+    copies (the private `_owned` says `frame` is a throw-away of
+    :func:`read_recording`, whose own columns are then reused).
+
+    The checks run in this order, each its own function: columns present
+    (:func:`_select_columns`), cells numeric and finite and converted
+    (:func:`_time_seconds`, :func:`_numeric_column`), temperature plausible,
+    enough samples, time increasing or duplicates merged
+    (:func:`_check_order`), time base plausible (:func:`_check_time_base`),
+    then gaps and jitter (:func:`_segments`).
+    """
+    where, first = _where
+    rows = None  # file row of each kept row, once duplicates are merged
+
+    def locate(i: int) -> str:
+        row = int(i) if rows is None else int(rows[i])
+        return f"{name} {where} {row + first}"
+
+    arrays = isinstance(frame, Mapping)
+    names = [str(c) for c in (list(frame) if arrays else list(frame.columns))]
+    n_rows = (len(next(iter(frame.values()))) if frame else 0) if arrays else len(frame)
+    if n_rows == 0:
+        raise InputError(f"{name}: has a header but no data rows")
+    chosen = _select_columns(names, columns, name, require_temperature)
+    time, origin = _time_seconds(frame[columns.time], columns, locate, _owned)
+    out = {"time": time}
+    axes = []
+    for (src, unit) in chosen["axes"]:
+        quantity, canonical, factor = _unit_of(unit)
+        values = _numeric_column(frame[src], src, locate)
+        out[src] = _own(values, _owned) if factor == 1.0 else values * factor
+        axes.append(Channel(src, src, quantity, canonical, unit))
+    temperatures = []
+    for k, src in enumerate(chosen["temperatures"]):
+        key = "temperature" if k == 0 else src
+        values = _numeric_column(frame[src], src, locate)
+        out[key] = values - 273.15 if columns.temperature_unit == "K" else values
+        _check_temperature(out[key], src, locate)
+        temperatures.append(key)
+    used = {columns.time, *out, *chosen["temperatures"]}
+    for extra in names:
+        if extra not in used:
+            col = _numeric_extra(frame[extra])
+            if col is not None:
+                out[extra] = col
+    n = len(out["time"])
+    if n < min_samples:
+        raise InputError(f"{name}: {n} samples, this command needs at least {min_samples}")
+    out, rows, notes = _check_order(out, columns, locate)
+    n = len(out["time"])
+    if n < min_samples:
+        raise InputError(f"{name}: {n} samples once duplicates are merged, this command needs at least {min_samples}")
+    nominal = _nominal_interval(out["time"])
+    if columns.time_unit is None and origin is None:  # numbers read as seconds, not datetimes
+        _check_time_base(out["time"], nominal, columns.time, name, limits)
+    out, segments, filled = _segments(out, nominal, columns.time, locate, jitter_tolerance, resample, allow_gaps)
+    notes.extend(filled)
+    if sha256 is None:
+        import pandas as pd
+
+        table = pd.DataFrame(frame, copy=False) if arrays else frame
+        sha256 = file_sha256(table.to_csv(index=False).encode())
+    return Recording(
+        data=out,
+        name=name,
+        sha256=sha256,
+        fs_hz=1.0 / nominal,
+        metadata=metadata or {},
+        axes=axes,
+        temperatures=temperatures,
+        segments=segments,
+        notes=notes,
+        time_origin=origin,
+    )
+
+
+# ----------------------------------------------------------------------------- reading files
+
+
+def _kind(name: str) -> str:
+    if name == "-":
+        return "csv"
+    path = Path(name)
+    suffix = path.suffix.lower()
+    if suffix in COMPRESSIONS:
+        suffix = Path(path.stem).suffix.lower()
+        if suffix not in (".csv", ".txt"):
+            raise InputError(f"{name}: a compressed recording must be CSV ({''.join(path.suffixes[-2:])!r}); use e.g. .csv.gz")
+        return "csv"
+    if suffix in (".parquet", ".pq"):
+        return "parquet"
+    if suffix in (".csv", ".txt"):
+        return "csv"
+    if suffix == ".ulg":
+        return "ulog"
+    if suffix == ".bin":
+        return "dataflash"
+    raise InputError(
+        f"{name}: unknown extension {suffix!r}; use .csv (optionally .gz .bz2 .xz .zst .zip), "
+        f".parquet, .ulg (PX4) or .bin (ArduPilot)"
+    )
+
+
+def _read_table(name: str, kind: str, spec: ColumnSpec, usecols: Sequence[str] | None):
+    """Frame (or arrays), Parquet metadata, SHA-256 and row naming of a CSV or Parquet file.
+
+    A file is hashed by streaming and parsed from its path (Parquet
+    memory-mapped), so its bytes are never held in memory twice.
+    """
+    if name == "-":
+        source = sys.stdin.buffer.read()
+        sha = file_sha256(source)
+    else:
+        source, sha = name, file_sha256(name)
+    patterns = None if usecols is None else (spec.time, *spec.rate_patterns, *usecols)
+    wanted = None if patterns is None else (lambda c: any(fnmatch.fnmatchcase(str(c), p) for p in patterns))
+    while True:
+        if kind == "parquet":
+            frame, metadata = _parse_parquet(name, source, wanted)
+            where = ("row", 1)
+        else:
+            frame, metadata = _parse_csv(name, source, spec, wanted), {}
+            where = ("line", 2)  # line 1 is the header
+        have = [str(c) for c in (frame if isinstance(frame, dict) else frame.columns)]
+        if wanted is None or _has_columns(have, spec):
+            return frame, metadata, sha, where
+        wanted = None  # a column is missing: read them all for the error message
+
+
+def _has_columns(have: Sequence[str], spec: ColumnSpec) -> bool:
+    needed = (spec.time, *spec.rate_patterns)
+    return all(any(fnmatch.fnmatchcase(c, p) for c in have) for p in needed)
+
+
+def _parse_csv(name: str, source: str | bytes, spec: ColumnSpec, usecols: Callable | None) -> pd.DataFrame:
+    import pandas as pd
+
+    compression = "infer"
+    if isinstance(source, bytes):
+        source, compression = _stdio.BytesIO(source), None
+    sep = _SEPARATOR_WORDS.get(spec.sep, spec.sep)
+    try:
+        return pd.read_csv(
+            source,
+            sep=sep,
+            decimal=spec.decimal,
+            comment="#",
+            skipinitialspace=True,
+            usecols=usecols,
+            compression=compression,
+            engine="python" if sep == r"\s+" else "c",
+        )
+    except pd.errors.EmptyDataError:
+        raise InputError(f"{name}: file is empty") from None
+    except pd.errors.ParserError as err:
+        raise InputError(f"{name}: unreadable CSV ({str(err).strip().splitlines()[-1]})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{name}: not a text CSV file") from None
+    except (OSError, EOFError, ValueError) as err:  # a damaged .gz/.zip, or one pandas cannot decompress
+        if isinstance(err, FileNotFoundError):
+            raise InputError(f"{name}: no such file") from None
+        raise InputError(f"{name}: unreadable CSV ({str(err).strip().splitlines()[-1] if str(err).strip() else type(err).__name__})") from None
+    except ImportError as err:
+        raise InputError(f"{name}: pandas needs {err.name} to decompress this file (pip install {err.name})") from None
+
+
+def _parse_parquet(name: str, source: str | bytes, usecols: Callable | None) -> tuple[pd.DataFrame | dict[str, np.ndarray], dict]:
+    """Frame (or, from a file, arrays) and gyrocomp metadata of a Parquet file.
+
+    `usecols` (a predicate on column names) reads only those of the file's
+    columns. A file's null-free numeric columns are decoded row group by row
+    group straight into NumPy arrays (:func:`_parquet_arrays`), without the
+    whole Arrow table, pandas' consolidating copy or pandas at all.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    empty = len(source) == 0 if isinstance(source, bytes) else os.path.getsize(source) == 0
+    if empty:
+        raise InputError(f"{name}: file is empty")
+    try:
+        if isinstance(source, bytes):
+            table = pq.read_table(pa.BufferReader(source))
+        else:
+            parquet = pq.ParquetFile(source, memory_map=True)
+            names = [c for c in parquet.schema_arrow.names if usecols is None or usecols(c)]
+            arrays = _parquet_arrays(parquet, names)
+            if arrays is not None:
+                return arrays, parquet_header(name, parquet.schema_arrow.metadata)
+            table = pq.read_table(source, columns=names, memory_map=True)
+    except (pa.ArrowInvalid, OSError) as err:
+        raise InputError(f"{name}: not a readable Parquet file ({err})") from None
+    return table.to_pandas(), parquet_header(name, table.schema.metadata)
+
+
+def _parquet_arrays(parquet, names: Sequence[str]) -> dict[str, np.ndarray] | None:
+    """What ``read_table(columns=names).to_pandas()`` gives a recording, as arrays, or None.
+
+    Each column is allocated once as a NumPy array and filled row group by
+    row group, so only one row group is ever held by Arrow. A stored pandas
+    index is left out, as :func:`recording_from_frame` does not use it.
+    None (read the table the ordinary way) when a column is not a null-free
+    integer or float column, or pandas renamed columns.
+    """
+    import pyarrow as pa
+
+    schema = parquet.schema_arrow
+    index_names, renamed = set(), False
+    pandas_meta = (schema.metadata or {}).get(b"pandas")
+    if pandas_meta:
+        meta = json.loads(pandas_meta)
+        index_names = {c for c in meta.get("index_columns", []) if isinstance(c, str)}
+        renamed = any(c.get("name") != c.get("field_name") for c in meta.get("columns", []) if c.get("field_name") not in index_names)
+    names = [c for c in names if c not in index_names]
+    types = [schema.field(c).type for c in names]
+    if renamed or not names or len(set(schema.names)) != len(schema.names):
+        return None
+    if not all(pa.types.is_floating(t) or pa.types.is_integer(t) for t in types):
+        return None
+    arrays = {c: np.empty(parquet.metadata.num_rows, dtype=t.to_pandas_dtype()) for c, t in zip(names, types)}
+    start = 0
+    for group in range(parquet.num_row_groups):
+        part = parquet.read_row_group(group, columns=names)
+        for c in names:
+            column = part.column(c)
+            if column.null_count:
+                return None
+            at = start
+            dtype = arrays[c].dtype
+            for chunk in column.chunks:  # the data buffer as it is (Array.to_numpy would import pandas)
+                values = np.frombuffer(chunk.buffers()[1], dtype=dtype, count=len(chunk), offset=chunk.offset * dtype.itemsize)
+                arrays[c][at : at + len(chunk)] = values
+                at += len(chunk)
+        start += part.num_rows
+    return arrays
+
+
+# ----------------------------------------------------------------------------- the checks
+
+
+def _select_columns(names: Sequence[str], spec: ColumnSpec, name: str, require_temperature: bool) -> dict:
+    """The file columns of the axes (with their units) and temperatures; refuse missing ones."""
+    def has(pattern):
+        return [c for c in names if fnmatch.fnmatchcase(c, pattern)]
+
+    missing = [] if spec.time in names else [spec.time]
+    temperatures: list[str] = []
+    for pattern in spec.temperature_patterns:
+        temperatures.extend(c for c in has(pattern) if c != spec.time and c not in temperatures)
+    if require_temperature and not temperatures:
+        missing.append(spec.temperature_patterns[0])
+    units = spec.rate_units * len(spec.rate_patterns) if len(spec.rate_units) == 1 else spec.rate_units
+    axes: dict[str, str] = {}
+    for pattern, unit in zip(spec.rate_patterns, units):
+        found = [c for c in has(pattern) if c != spec.time and c not in temperatures]
+        if not found:
+            missing.append(pattern)
+        for c in found:
+            axes.setdefault(c, unit)
+    if missing:
+        hint = ""
+        if any(m in spec.temperature_patterns for m in missing):
+            hint = " (map it with --temp-col)"
+        if len(names) == 1 and any(s in names[0] for s in ";\t|"):
+            hint = " (one column only: is the separator another one? pass --sep)"
+        what = "no column matches" if any(_is_glob(m) for m in missing) else "missing column"
+        raise InputError(
+            f"{name}: {what} {', '.join(repr(m) for m in missing)}{hint}; "
+            f"the file has {', '.join(repr(c) for c in names)}"
+        )
+    return {"axes": list(axes.items()), "temperatures": temperatures}
+
+
+def _unit_of(unit: str) -> tuple[str, str, float]:
+    """Quantity, recording unit and conversion factor of an axis unit."""
+    if unit in RATE_UNITS:
+        return "angular_rate", "deg/s", RATE_UNITS[unit]
+    return "acceleration", "m/s^2", ACCELERATION_UNITS[unit]
+
+
+def _time_seconds(series, spec: ColumnSpec, locate, owned: bool) -> tuple[np.ndarray, str | None]:
+    """The time column in seconds, and what its 0 is when it was converted.
+
+    Seconds are kept as they are (origin None). Any other unit becomes
+    seconds since the first stamp, the origin saying what that stamp was
+    (``"2024-03-07T15:45:00+00:00"``, ``"1700000000000000 us"``): integer
+    stamps are differenced as integers first, so no digit of a µs or ns
+    epoch is lost to float64.
+    """
+    unit = spec.time_unit
+    if unit == "datetime" or (unit is None and _is_text(series) and not _has_numbers(series)):
+        return _datetime_seconds(series, spec.time, locate)
+    factor = TIME_UNITS[unit or "s"]
+    raw = series if isinstance(series, np.ndarray) else (None if _is_text(series) else series.to_numpy())
+    if factor != 1.0 and raw is not None and raw.dtype.kind in "iu":
+        start = raw[0]
+        return (raw - start).astype(float) * factor, f"{int(start)} {unit}"
+    values = _numeric_column(series, spec.time, locate)
+    if factor == 1.0:
+        return _own(values, owned), None
+    start = float(values[0])
+    return (values - start) * factor, f"{start!r} {unit}"
+
+
+def _datetime_seconds(series, src: str, locate) -> tuple[np.ndarray, str]:
+    import pandas as pd
+
+    series = pd.Series(series) if isinstance(series, np.ndarray) else series
+    stamps = pd.to_datetime(series, format="ISO8601", errors="coerce", utc=True)
+    bad = stamps.isna().to_numpy()
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InputError(f"{locate(i)}: `{src}` = {series.iloc[i]!r} is not an ISO 8601 date and time")
+    seconds = (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy()
+    return seconds, stamps.iloc[0].isoformat()
+
+
+def _check_order(out: dict, spec: ColumnSpec, locate) -> tuple[dict, np.ndarray | None, list[str]]:
+    """Refuse time going back; refuse or merge (``spec.dedupe``) duplicate stamps.
+
+    Returns the columns, the file row of each kept row (None when all were
+    kept) and the notes.
+    """
+    time = out["time"]
+    dt = np.diff(time)
+    back = np.flatnonzero(dt < 0)
+    same = np.flatnonzero(dt == 0)
+    if back.size and (not same.size or back[0] < same[0] or spec.dedupe is not None):
+        i = int(back[0]) + 1
+        raise InputError(
+            f"{locate(i)}: `{spec.time}` = {float(time[i])!r} goes back from the previous "
+            f"time {float(time[i - 1])!r}; time must be strictly increasing"
+        )
+    if not same.size:
+        return out, None, []
+    if spec.dedupe is None:
+        i = int(same[0]) + 1
+        raise InputError(
+            f"{locate(i)}: `{spec.time}` = {float(time[i])!r} duplicates the previous time "
+            f"{float(time[i - 1])!r}; time must be strictly increasing "
+            f"({same.size} duplicate stamps; --dedupe first|mean merges them)"
+        )
+    starts = np.flatnonzero(np.r_[True, dt != 0])
+    if spec.dedupe == "first":
+        merged = {key: values[starts] for key, values in out.items()}
+    else:
+        counts = np.diff(np.r_[starts, len(time)])
+        merged = {key: np.add.reduceat(values, starts) / counts for key, values in out.items()}
+        merged["time"] = time[starts]
+    groups = int(np.count_nonzero(np.diff(np.r_[starts, len(time)]) > 1))
+    how = "kept the first row" if spec.dedupe == "first" else "averaged the rows"
+    note = f"merged {same.size} duplicate time stamps in {groups} places ({how}; --dedupe {spec.dedupe})"
+    return merged, starts, [note]
+
+
+def _nominal_interval(time: np.ndarray) -> float:
+    if time.size < 2:
+        return 1.0
+    return _median_inplace(np.diff(time))
+
+
+def _check_time_base(time: np.ndarray, nominal: float, src: str, name: str, limits: TimeLimits) -> None:
+    """Refuse a time column read as seconds whose rate or span no gyro log has; name the likely unit."""
+    span = float(time[-1] - time[0])
+    day = 86400.0
+
+    def plausible(factor: float) -> bool:
+        fs = 1.0 / (nominal * factor)
+        return limits.min_fs_hz <= fs <= limits.max_fs_hz and span * factor <= limits.max_span_days * day
+
+    if plausible(1.0):
+        return
+    fitting = [unit for unit in ("ms", "us", "ns") if plausible(TIME_UNITS[unit])]
+    # the likeliest unit gives the rate nearest (in decades) to a typical gyro log's
+    fitting.sort(key=lambda unit: abs(math.log10(1.0 / (nominal * TIME_UNITS[unit]) / limits.typical_fs_hz)))
+    if fitting:
+        likely = f"it looks like {_UNIT_WORDS[fitting[0]]}: pass --time-unit {fitting[0]}"
+        if len(fitting) > 1:
+            likely += f" ({' or '.join(fitting[1:])} would also fit)"
+    else:
+        likely = "pass --time-unit"
+    raise InputError(
+        f"{name}: `{src}` read as seconds gives {1.0 / nominal:.3g} Hz over {span / day:.3g} days, "
+        f"which no gyro log has; {likely}, or --time-unit s to keep seconds"
+    )
+
+
+_UNIT_WORDS = {"ms": "milliseconds (ms)", "us": "microseconds (µs, us)", "ns": "nanoseconds (ns)"}
+
+
+def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, resample: bool, allow_gaps: bool):
+    """Segments of a time axis, or its uniform resampling; refuse what neither allows.
+
+    An interval longer than ``(1 + tolerance)`` times the median is a gap;
+    one shorter than ``(1 - tolerance)`` times it is jitter.
+
+    Returns
+    -------
+    out : dict
+        The columns (resampled when asked).
+    segments : list of slice
+    notes : list of str
+    """
+    time = out["time"]
+    n = len(time)
+    if n < 2:
+        return out, [slice(0, n)], []
+    dt = np.diff(time)
+    slack = 1e-9 * nominal  # an interval exactly at the tolerance (ms stamps: 10 or 30 ms at 20 ms) is within it
+    short = np.flatnonzero(dt < (1.0 - tolerance) * nominal - slack)
+    long = np.flatnonzero(dt > (1.0 + tolerance) * nominal + slack)
+    if not short.size and not long.size:
+        return out, [slice(0, n)], []
+    if resample:
+        note = (
+            f"resampled onto a uniform {nominal:.6g} s grid: {long.size} gaps filled by linear "
+            f"interpolation, the longest {float(dt[long].max()):.6g} s"
+            if long.size
+            else f"resampled onto a uniform {nominal:.6g} s grid: no gap, {short.size} short intervals"
+        )
+        out = _resample(out, nominal)
+        return out, [slice(0, len(out["time"]))], [note]
+    if short.size or not allow_gaps:
+        candidates = short if allow_gaps else np.r_[short, long]
+        worst = int(candidates[np.argmax(np.abs(dt[candidates] - nominal))])
+        raise InputError(
+            f"{locate(worst + 1)}: sampling interval {float(dt[worst]):.6g} s in `{src}`, the median is "
+            f"{nominal:.6g} s (tolerance {tolerance:.0%}); pass --resample to interpolate onto a uniform grid"
+        )
+    bounds = np.r_[0, long + 1, n]
+    segments = [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
+    return out, segments, [f"{len(segments)} segments: {long.size} gaps, the longest {float(dt[long].max()):.6g} s (not interpolated)"]
+
+
+def _resample(columns: dict[str, np.ndarray], interval: float) -> dict[str, np.ndarray]:
+    time = columns["time"]
+    n = int(math.floor((time[-1] - time[0]) / interval + 1e-9)) + 1
+    grid = time[0] + interval * np.arange(n)
+    return {key: (grid if key == "time" else np.interp(grid, time, values)) for key, values in columns.items()}
+
+
+def _numeric_column(series: pd.Series | np.ndarray, src: str, locate) -> np.ndarray:
+    """A column as finite float64 values; a NumPy column must be integer or float."""
+    if isinstance(series, np.ndarray):
+        values = series.astype(float, copy=False)
+    else:
+        import pandas as pd
+
+        if series.dtype == object or pd.api.types.is_string_dtype(series.dtype):
+            values = pd.to_numeric(series, errors="coerce")
+            bad = values.isna() & series.notna()
+            if bad.any():
+                i = int(np.flatnonzero(bad.to_numpy())[0])
+                raise InputError(f"{locate(i)}: `{src}` = {series.iloc[i]!r} is not a number")
+            series = values
+        if not pd.api.types.is_numeric_dtype(series.dtype) or pd.api.types.is_bool_dtype(series.dtype):
+            raise InputError(f"{locate(0)}: `{src}` is not numeric (type {series.dtype})")
+        values = series.to_numpy(dtype=float)
+    finite = np.isfinite(values)
+    if not finite.all():
+        i = int(np.flatnonzero(~finite)[0])
+        what = "missing or NaN" if np.isnan(values[i]) else f"{float(values[i])!r}"
+        raise InputError(f"{locate(i)}: `{src}` is {what}")
+    return values
+
+
+def _numeric_extra(series: pd.Series | np.ndarray) -> np.ndarray | None:
+    """A further column as float64 when every cell is a number (infinity included), else None."""
+    if isinstance(series, np.ndarray):
+        values = series.astype(float, copy=False)
+        return None if np.isnan(values).any() else values
+    import pandas as pd
+
+    col = pd.to_numeric(series, errors="coerce")
+    return col.to_numpy(dtype=float) if col.notna().all() else None
+
+
+def _check_temperature(temperature: np.ndarray, src: str, locate) -> None:
+    lo, hi = _PLAUSIBLE_DEGC
+    outside = (temperature < lo) | (temperature > hi)
+    if outside.any():
+        i = int(np.flatnonzero(outside)[0])
+        raise InputError(
+            f"{locate(i)}: `{src}` = {temperature[i]:g} degC is outside "
+            f"[{lo:g}, {hi:g}] degC; wrong unit? (pass --temp-unit K for kelvin)"
+        )
+
+
+def _own(values: np.ndarray, owned: bool) -> np.ndarray:
+    """`values` as a writable array the recording may keep.
+
+    Reused when `owned` and the memory under it is this column alone (a
+    column of a throw-away frame, of which pandas hands out a read-only
+    view); otherwise copied, so the recording neither aliases a caller's
+    table nor keeps a 2-D block of other columns alive.
+    """
+    base = values
+    while isinstance(base.base, np.ndarray):
+        base = base.base
+    if owned and base.size == values.size:
+        with contextlib.suppress(ValueError):  # memory numpy may not make writable: copy below
+            values.setflags(write=True)
+            return values
+    return values.copy()
+
+
+def _median_inplace(values: np.ndarray) -> float:
+    """``np.median(values)`` without its copy; reorders `values`."""
+    n = len(values)
+    k = n // 2
+    if n % 2:
+        values.partition(k)
+        return float(values[k])
+    values.partition((k - 1, k))
+    return float((values[k - 1] + values[k]) / 2.0)
+
+
+def _is_text(series) -> bool:
+    if isinstance(series, np.ndarray):
+        return series.dtype.kind in "OUS"
+    import pandas as pd
+
+    return series.dtype == object or pd.api.types.is_string_dtype(series.dtype)
+
+
+def _has_numbers(series) -> bool:
+    """Whether any cell of a text column reads as a number (then it is a numeric column with a bad cell)."""
+    import pandas as pd
+
+    return bool(pd.to_numeric(pd.Series(series), errors="coerce").notna().any())
+
+
+def _is_glob(pattern: str) -> bool:
+    return any(ch in pattern for ch in "*?[")

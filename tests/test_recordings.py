@@ -1,0 +1,207 @@
+"""Recordings as real loggers write them: several axes, time bases, compression, CSV dialects, gaps, duplicates."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gyrocomp import artefacts, recordings
+from gyrocomp.errors import InputError
+from gyrocomp.recordings import ColumnSpec, read_recording
+
+REPO = Path(__file__).resolve().parents[1]
+LSM6DSM = REPO.parent / "shared" / "real-data" / "pan-lsm6dsm-tvac" / "pan_lsm6dsm_tvac_cold_2020-03-07.csv"
+
+
+def _three_axis(n=200, fs=100.0, t0=0.0):
+    t = t0 + np.arange(n) / fs
+    return pd.DataFrame(
+        {
+            "time": t,
+            "gx": 0.1 + 0.01 * np.sin(t),
+            "gy": -0.2 + 0.0 * t,
+            "gz": 0.3 + 0.001 * t,
+            "ax": np.full(n, 0.0),
+            "ay": np.full(n, 0.0),
+            "az": np.full(n, 1.0),
+            "temp": 25.0 + 0.01 * t,
+        }
+    )
+
+
+def test_several_axes_by_list_and_glob_keep_their_names(tmp_path):
+    frame = _three_axis()
+    path = tmp_path / "imu.csv"
+    frame.to_csv(path, index=False)
+    by_list = read_recording(path, ColumnSpec(rate="gx,gy,gz", temperature="temp"), require_temperature=True)
+    by_glob = read_recording(path, ColumnSpec(rate="g?", temperature="temp"))
+    assert by_list.axis_names == by_glob.axis_names == ("gx", "gy", "gz")
+    for name in ("gx", "gy", "gz"):
+        np.testing.assert_array_equal(by_glob.column(name), frame[name].to_numpy())
+    np.testing.assert_array_equal(by_list.temperature_c, frame["temp"].to_numpy())
+    one = by_list.axis("gy")
+    assert one.axis_names == ("gy",) and one.axes[0].column == "rate"
+    np.testing.assert_array_equal(one.rate_dps, frame["gy"].to_numpy())
+    with pytest.raises(InputError, match=r"imu.csv: 3 axes \(gx, gy, gz\); this command takes one"):
+        by_list.rate_dps
+    with pytest.raises(InputError, match="imu.csv: no column matches 'w_\\*'"):
+        read_recording(path, ColumnSpec(rate="w_*"))
+
+
+def test_accelerometer_axes_have_their_own_units(tmp_path):
+    frame = _three_axis()
+    path = tmp_path / "imu.csv"
+    frame.to_csv(path, index=False)
+    spec = ColumnSpec(rate="g*,a*", rate_unit="rad/s,g", temperature="temp")
+    rec = read_recording(path, spec)
+    units = {a.name: (a.quantity, a.unit, a.file_unit) for a in rec.axes}
+    assert units["gx"] == ("angular_rate", "deg/s", "rad/s")
+    assert units["az"] == ("acceleration", "m/s^2", "g")
+    np.testing.assert_allclose(rec.column("az"), 9.80665)  # standard gravity, SI brochure
+    np.testing.assert_allclose(rec.column("gy"), -0.2 * 180 / math.pi)
+    with pytest.raises(InputError, match="give one unit, or one per --rate-col entry"):
+        ColumnSpec(rate="g*,a*", rate_unit="deg/s,g,g")
+    with pytest.raises(InputError, match="unknown rate unit 'furlong'"):
+        ColumnSpec(rate_unit="furlong")
+
+
+def test_microseconds_without_a_unit_are_refused_naming_the_unit(tmp_path):
+    n, fs = 2000, 100.0
+    us = (1_700_000_000_000_000 + np.arange(n) * int(1e6 / fs)).astype(np.int64)
+    frame = pd.DataFrame({"timestamp": us, "rate": np.zeros(n)})
+    path = tmp_path / "px4.csv"
+    frame.to_csv(path, index=False)
+    with pytest.raises(InputError) as info:
+        read_recording(path, ColumnSpec(time="timestamp"))
+    message = str(info.value)
+    assert message.startswith(f"{path}: `timestamp` read as seconds")
+    assert "microseconds (µs, us): pass --time-unit us" in message
+    assert "\n" not in message
+    rec = read_recording(path, ColumnSpec(time="timestamp", time_unit="us"))
+    assert rec.fs_hz == pytest.approx(fs, rel=1e-12)
+    assert rec.time_s[-1] - rec.time_s[0] == pytest.approx((n - 1) / fs, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "scale, unit, fs, span_s",
+    [(1e3, "ms", 100.0, 3600.0), (1e9, "ns", 1000.0, 4.0), (1e6, "us", 200.0, 20.0), (1e6, "us", 1000.0, 4.0)],
+)
+def test_other_wrong_time_bases_name_their_unit(tmp_path, scale, unit, fs, span_s):
+    n = int(span_s * fs)
+    t = np.arange(n) / fs * scale
+    path = tmp_path / "t.csv"
+    pd.DataFrame({"time": t, "rate": np.zeros(n)}).to_csv(path, index=False)
+    with pytest.raises(InputError, match=f"it looks like .*: pass --time-unit {unit}"):
+        read_recording(path)
+    assert read_recording(path, ColumnSpec(time_unit=unit)).fs_hz == pytest.approx(fs)
+    # an explicit unit is obeyed, plausible or not
+    assert read_recording(path, ColumnSpec(time_unit="s")).fs_hz == pytest.approx(fs / scale)
+
+
+def test_iso_datetimes_are_read_as_seconds_from_the_first(tmp_path):
+    start = pd.Timestamp("2024-03-07T15:45:00Z")
+    stamps = start + pd.to_timedelta(np.arange(300) * 0.5, unit="s")
+    frame = pd.DataFrame({"time": [s.isoformat() for s in stamps], "rate": np.arange(300.0)})
+    path = tmp_path / "lab.csv"
+    frame.to_csv(path, index=False)
+    for spec in (ColumnSpec(), ColumnSpec(time_unit="datetime")):
+        rec = read_recording(path, spec)
+        np.testing.assert_allclose(rec.time_s, np.arange(300) * 0.5, atol=1e-9)
+        assert rec.fs_hz == pytest.approx(2.0)
+        assert rec.time_origin == "2024-03-07T15:45:00+00:00"
+    frame.loc[7, "time"] = "yesterday"
+    frame.to_csv(path, index=False)
+    with pytest.raises(InputError, match="lab.csv line 9: `time` = 'yesterday' is not an ISO 8601 date"):
+        read_recording(path)
+
+
+@pytest.mark.parametrize("suffix", [".csv.gz", ".csv.bz2", ".csv.xz", ".csv.zst", ".csv.zip"])
+def test_compressed_csv_reads_like_the_plain_file(tmp_path, suffix):
+    frame = _three_axis()
+    plain = tmp_path / "imu.csv"
+    frame.to_csv(plain, index=False)
+    packed = tmp_path / f"imu{suffix}"
+    frame.to_csv(packed, index=False)  # pandas compresses by extension
+    assert packed.read_bytes() != plain.read_bytes()
+    spec = ColumnSpec(rate="gx,gy,gz", temperature="temp")
+    a, b = read_recording(plain, spec), read_recording(packed, spec)
+    pd.testing.assert_frame_equal(a.data, b.data, check_exact=True)
+    assert b.sha256 == artefacts.file_sha256(packed)
+
+
+def test_semicolon_and_decimal_comma(tmp_path):
+    text = "time;rate;temperature\n0,0;1,5;20,25\n0,5;1,75;20,5\n1,0;2,0;20,75\n"
+    path = tmp_path / "lab.csv"
+    path.write_text(text)
+    rec = read_recording(path, ColumnSpec(sep=";", decimal=","))
+    np.testing.assert_array_equal(rec.rate_dps, [1.5, 1.75, 2.0])
+    np.testing.assert_array_equal(rec.temperature_c, [20.25, 20.5, 20.75])
+    with pytest.raises(InputError, match="one column only: is the separator another one\\? pass --sep"):
+        read_recording(path)
+
+
+def test_duplicate_stamps_refused_naming_the_line_or_merged(tmp_path):
+    text = "time,rate,temperature\n0,1,20\n1,2,20\n1,4,21\n2,3,20\n3,5,20\n"
+    path = tmp_path / "d.csv"
+    path.write_text(text)
+    with pytest.raises(InputError, match=r"d.csv line 4: `time` = 1.0 duplicates the previous time 1.0;.*--dedupe first\|mean"):
+        read_recording(path)
+    first = read_recording(path, ColumnSpec(dedupe="first"))
+    np.testing.assert_array_equal(first.time_s, [0, 1, 2, 3])
+    np.testing.assert_array_equal(first.rate_dps, [1, 2, 3, 5])
+    mean = read_recording(path, ColumnSpec(dedupe="mean"))
+    np.testing.assert_array_equal(mean.rate_dps, [1, 3, 3, 5])
+    np.testing.assert_array_equal(mean.temperature_c, [20, 20.5, 20, 20])
+    assert mean.notes == ("merged 1 duplicate time stamps in 1 places (averaged the rows; --dedupe mean)",)
+    # a row after the merge is still named by its line in the file
+    path.write_text(text + "4,x,20\n")
+    with pytest.raises(InputError, match="d.csv line 7: `rate` = 'x' is not a number"):
+        read_recording(path, ColumnSpec(dedupe="first"))
+
+
+def test_gaps_become_segments_never_silently_filled(tmp_path):
+    t = np.r_[np.arange(100) * 0.1, 60.0 + np.arange(50) * 0.1, 200.0 + np.arange(30) * 0.1]
+    frame = pd.DataFrame({"time": t, "rate": t.copy()})
+    with pytest.raises(InputError, match=r"<table> row 151: sampling interval 135.1 s"):
+        recordings.recording_from_frame(frame)
+    rec = recordings.recording_from_frame(frame, allow_gaps=True)
+    assert [(s.start, s.stop) for s in rec.segments] == [(0, 100), (100, 150), (150, 180)]
+    assert rec.fs_hz == pytest.approx(10.0)
+    assert rec.notes == ("3 segments: 2 gaps, the longest 135.1 s (not interpolated)",)
+    parts = rec.split()
+    assert [p.n_samples for p in parts] == [100, 50, 30]
+    np.testing.assert_array_equal(parts[1].rate_dps, t[100:150])
+    filled = recordings.recording_from_frame(frame, resample=True)
+    assert filled.notes == ("resampled onto a uniform 0.1 s grid: 2 gaps filled by linear interpolation, the longest 135.1 s",)
+    assert len(filled.segments) == 1 and filled.n_samples == 2030
+
+
+def test_time_limits_equal_the_shipped_config():
+    from gyrocomp.config import bind, load_config
+
+    table = load_config("recordings")
+    assert bind(recordings.TimeLimits, table["time"], "recordings.toml") == recordings.TimeLimits()
+
+
+@pytest.mark.skipif(not LSM6DSM.exists(), reason="shared real data absent")
+def test_lsm6dsm_bursts_read_as_segments_with_the_published_slopes():
+    """PAN LSM6DSM TVAC log: 25 bursts of 5 s at 50 Hz, 5 duplicate stamps; slopes as in its README."""
+    with pytest.raises(InputError, match="duplicates the previous time"):
+        read_recording(LSM6DSM, ColumnSpec(rate="rate_*"), allow_gaps=True)
+    rec = read_recording(LSM6DSM, ColumnSpec(rate="rate_*", dedupe="first"), allow_gaps=True, require_temperature=True)
+    assert rec.axis_names == ("rate_x", "rate_y", "rate_z")
+    assert len(rec.segments) == 25
+    assert rec.n_samples == 6250 - 5
+    assert rec.fs_hz == pytest.approx(50.0, rel=0.01)
+    assert all(240 <= s.stop - s.start <= 250 for s in rec.segments)
+    # bias against temperature from the burst medians, as the folder's README fits it
+    parts = rec.split()
+    temps = np.array([np.median(p.temperature_c) for p in parts])
+    expected = {"rate_x": 0.0301, "rate_y": -0.0142, "rate_z": 0.0014}  # deg/s/degC, README of the data set
+    for axis, slope in expected.items():
+        medians = np.array([np.median(p.column(axis)) for p in parts])
+        assert np.polyfit(temps, medians, 1)[0] == pytest.approx(slope, abs=6e-4)
