@@ -9,6 +9,7 @@ a table and refuses unknown keys, naming the file and the key.
 from __future__ import annotations
 
 import dataclasses
+import importlib.resources
 import os
 import tomllib
 from pathlib import Path
@@ -18,8 +19,19 @@ from gyrocomp.errors import InputError
 
 __all__ = ["CONFIG_DIR", "load_config", "apply_overrides", "bind", "settings_dict"]
 
-CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
-"""The shipped configs; a bare name such as ``pe-lcd-anfis`` is looked up here."""
+def _config_dir() -> Path:
+    """``configs/`` of the source checkout this package runs from, else the installed package data."""
+    root = Path(__file__).resolve().parent.parent
+    if (root / "pyproject.toml").is_file() and (root / "configs").is_dir():
+        return root / "configs"
+    return Path(str(importlib.resources.files("gyrocomp") / "configs"))
+
+
+CONFIG_DIR = _config_dir()
+"""The shipped configs; a bare name such as ``pe-lcd-anfis`` is looked up here.
+
+In a checkout, the top-level ``configs/``; in an installed wheel, the same
+files as package data (``gyrocomp/configs/``, see ``setup.py``)."""
 
 T = TypeVar("T")
 

@@ -492,9 +492,9 @@ def read_recording(
     if kind in ("ulog", "dataflash"):
         from gyrocomp import flightlogs
 
-        frame, where = flightlogs.read_log(name, kind), ("row", 1)
-        columns = flightlogs.default_columns(columns, frame)
-        sha, metadata = file_sha256(name), {}
+        sha = file_sha256(name)  # also the one-line error for a missing file
+        frame, columns = flightlogs.read_log(name, kind, columns)
+        metadata, where = {}, ("message", 1)
     else:
         frame, metadata, sha, where = _read_table(name, kind, columns, usecols)
     return recording_from_frame(

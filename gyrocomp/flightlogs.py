@@ -1,0 +1,190 @@
+"""Flight-controller logs as recordings: PX4 ULog (``.ulg``) and ArduPilot DataFlash (``.bin``).
+
+Each logged sensor stream becomes columns named ``<stream>_<instance>_<field>``:
+
+=========================  ===================================  ==========  ===========
+log                        columns                              axes unit   time stamps
+=========================  ===================================  ==========  ===========
+ULog ``sensor_gyro``       ``sensor_gyro_0_x`` .. ``_z``,       rad/s       µs
+                           ``sensor_gyro_0_temperature`` [degC]
+ULog ``sensor_accel``      ``sensor_accel_0_x`` .. ``_z``,      m/s^2       µs
+                           ``sensor_accel_0_temperature``
+DataFlash ``IMU``          ``IMU_0_GyrX`` .. ``GyrZ``,          rad/s,      µs
+                           ``IMU_0_AccX`` .. ``AccZ``,          m/s^2       (``TimeUS``)
+                           ``IMU_0_T`` [degC]
+=========================  ===================================  ==========  ===========
+
+for every instance (``I`` field of ``IMU``; older logs' ``IMU2``, ``IMU3``
+are instances 1 and 2). Choose axes with the ordinary column options, e.g.
+``--rate-col 'sensor_gyro_1_[xyz]' --temp-col sensor_gyro_1_temperature``
+or ``--rate-col 'IMU_0_Gyr?,IMU_0_Acc?'``; by default the first gyro and its
+temperature are read. The units and the µs time base come from the log
+format, so ``--rate-unit`` and ``--time-unit`` do not apply. One recording
+has one time base: columns of one stream and instance (an ``IMU`` message
+carries gyro, accelerometer and temperature together; ULog logs the gyro
+and the accelerometer as separate topics with their own time stamps).
+
+pyulog and pymavlink are the optional extra ``gyrocomp[logs]``.
+
+References
+----------
+.. [1] PX4 ULog file format, https://docs.px4.io/main/en/dev_log/ulog_file_format.html
+.. [2] ArduPilot onboard log (DataFlash) messages ``FMT`` and ``IMU``,
+       https://ardupilot.org/copter/docs/logmessages.html
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import fnmatch
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from gyrocomp.errors import InputError
+
+if TYPE_CHECKING:
+    from gyrocomp.recordings import ColumnSpec
+
+__all__ = ["read_log"]
+
+ULOG_TOPICS = {"sensor_gyro": "rad/s", "sensor_accel": "m/s^2"}
+"""ULog topics read, with the unit of their x, y, z fields."""
+
+DATAFLASH_FIELDS = {"GyrX": "rad/s", "GyrY": "rad/s", "GyrZ": "rad/s", "AccX": "m/s^2", "AccY": "m/s^2", "AccZ": "m/s^2"}
+"""Axis fields of a DataFlash ``IMU`` message, with their units; ``T`` is the temperature [degC]."""
+
+_DEFAULT_RATE = {"ulog": "sensor_gyro_0_[xyz]", "dataflash": "IMU_0_Gyr?"}
+"""The axes read when the column options are left at their defaults: the first gyro."""
+
+
+@dataclasses.dataclass(frozen=True)
+class _Stream:
+    """One sensor stream of a log: its time stamps [µs] and columns."""
+
+    name: str
+    time_us: np.ndarray
+    columns: dict
+    units: dict
+
+
+def read_log(name: str, kind: str, spec: ColumnSpec) -> tuple[dict[str, np.ndarray], ColumnSpec]:
+    """The columns of the one stream `spec` selects, and `spec` resolved for them.
+
+    Parameters
+    ----------
+    name : str
+        Path of the log.
+    kind : {"ulog", "dataflash"}
+    spec : ColumnSpec
+        The column options; the default ``rate`` selects the first gyro, the
+        default ``temperature`` the chosen stream's temperature.
+
+    Returns
+    -------
+    columns : dict of str to numpy.ndarray
+        ``time`` [µs, int64] and the stream's columns.
+    spec : ColumnSpec
+        With the axes and temperatures named one by one, their units, and
+        ``time_unit="us"``.
+
+    Raises
+    ------
+    InputError
+        Unreadable log, no such stream or column (the message lists them),
+        or columns of streams with separate time stamps.
+    """
+    streams = _read_ulog(name) if kind == "ulog" else _read_dataflash(name)
+    if not streams:
+        raise InputError(f"{name}: no {'sensor_gyro or sensor_accel topic' if kind == 'ulog' else 'IMU message'} in the log")
+    patterns = [p.strip() for p in spec.rate.split(",") if p.strip()]
+    if spec.rate == "rate":  # the column options' default: the first gyro
+        patterns = [_DEFAULT_RATE[kind]]
+    chosen = [s for s in streams if any(fnmatch.fnmatchcase(c, p) for c in s.columns for p in patterns)]
+    if not chosen:
+        every = [c for s in streams for c in s.columns]
+        raise InputError(f"{name}: no column matches {', '.join(repr(p) for p in patterns)}; the log has {', '.join(every)}")
+    if len(chosen) > 1:
+        raise InputError(
+            f"{name}: {', '.join(repr(p) for p in patterns)} selects columns of {', '.join(s.name for s in chosen)}, "
+            f"which are logged with their own time stamps; read one stream per run"
+        )
+    stream = chosen[0]
+    axes = [c for c in stream.units if any(fnmatch.fnmatchcase(c, p) for p in patterns)]  # a glob skips the temperature
+    if not axes:
+        raise InputError(f"{name}: {', '.join(repr(p) for p in patterns)} selects no sensor axis; {stream.name} has {', '.join(stream.units)}")
+    if spec.temperature == "temperature":  # the default: the stream's own temperature
+        temps = [c for c in stream.columns if c not in stream.units]
+    else:
+        wanted = [p.strip() for p in spec.temperature.split(",") if p.strip()]
+        temps = [c for c in stream.columns if any(fnmatch.fnmatchcase(c, p) for p in wanted)]
+    resolved = dataclasses.replace(
+        spec,
+        time="time",
+        time_unit="us",
+        rate=",".join(axes),
+        rate_unit=",".join(stream.units[c] for c in axes),
+        temperature=",".join(temps) or "temperature",
+        temperature_unit="degC",
+    )
+    return {"time": stream.time_us, **stream.columns}, resolved
+
+
+def _read_ulog(name: str) -> list[_Stream]:
+    pyulog = _require("pyulog", name)
+    try:
+        log = pyulog.ULog(name, list(ULOG_TOPICS))
+    except Exception as err:  # pyulog raises bare exceptions on a damaged file
+        raise InputError(f"{name}: not a readable ULog file ({type(err).__name__}: {err})") from None
+    streams = []
+    for data in sorted(log.data_list, key=lambda d: (list(ULOG_TOPICS).index(d.name), d.multi_id)):
+        fields = data.data
+        prefix = f"{data.name}_{data.multi_id}_"
+        stamp = fields["timestamp_sample"] if "timestamp_sample" in fields else fields["timestamp"]
+        columns = {prefix + axis: np.asarray(fields[axis], dtype=float) for axis in "xyz" if axis in fields}
+        units = dict.fromkeys(columns, ULOG_TOPICS[data.name])
+        if "temperature" in fields:
+            columns[prefix + "temperature"] = np.asarray(fields["temperature"], dtype=float)
+        streams.append(_Stream(f"{data.name} instance {data.multi_id}", np.asarray(stamp, dtype=np.int64), columns, units))
+    return streams
+
+
+def _read_dataflash(name: str) -> list[_Stream]:
+    _require("pymavlink", name)
+    from pymavlink import DFReader
+
+    try:
+        log = DFReader.DFReader_binary(name, zero_time_base=True)
+    except Exception as err:  # pymavlink raises bare exceptions on a damaged file
+        raise InputError(f"{name}: not a readable DataFlash log ({type(err).__name__}: {err})") from None
+    rows: dict[int, list] = {}
+    fields = ["TimeUS", *DATAFLASH_FIELDS, "T"]
+    while True:
+        try:
+            msg = log.recv_match(type=["IMU", "IMU2", "IMU3"])
+        except Exception as err:
+            raise InputError(f"{name}: damaged DataFlash log ({type(err).__name__}: {err})") from None
+        if msg is None:
+            break
+        kind = msg.get_type()
+        instance = int(getattr(msg, "I", 0)) if kind == "IMU" else int(kind[-1]) - 1
+        rows.setdefault(instance, []).append([getattr(msg, f, np.nan) for f in fields])
+    log.close()
+    streams = []
+    for instance in sorted(rows):
+        table = np.array(rows[instance], dtype=float)
+        prefix = f"IMU_{instance}_"
+        columns = {prefix + f: table[:, k + 1] for k, f in enumerate(fields[1:]) if not np.isnan(table[:, k + 1]).all()}
+        units = {prefix + f: u for f, u in DATAFLASH_FIELDS.items()}
+        time_us = np.array([r[0] for r in rows[instance]], dtype=np.int64)
+        streams.append(_Stream(f"IMU instance {instance}", time_us, columns, units))
+    return streams
+
+
+def _require(module: str, name: str):
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise InputError(f"{name}: reading it needs {module}: pip install 'gyrocomp[logs]'") from None
