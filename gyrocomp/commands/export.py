@@ -56,7 +56,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     drift = load_model(artefacts.read_json(model_path, "gyrocomp.model"), str(model_path))
     recording = None
     if options.vectors is not None:
-        recording = recordings.read_recording(options.vectors, options.columns, require_temperature=True, min_samples=2)
+        recording = recordings.read_recording(options.vectors, options.columns, require_temperature=True, min_samples=2).axis()
     export_options = ExportOptions(
         options.fit_polynomial, options.axis.lower(), options.instance, options.device_id, recording, options.n_vectors, options.prefix
     )
