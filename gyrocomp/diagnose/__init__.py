@@ -17,7 +17,12 @@ measured temperature, white noise) on a fit recording, then
 4. **what it could have missed** -- for every candidate not selected, the
    weakest amplitude an ideal detector would find beside the selected model
    with probability ``detection_power``
-   (:func:`gyrocomp.diagnose.detectability.detection_limit`).
+   (:func:`gyrocomp.diagnose.detectability.detection_limit`);
+5. **what it does not explain** -- the residual of the selected model on
+   every run is tested for structure the model does not predict
+   (:func:`gyrocomp.diagnose.unexplained.verdict`); when some is found the
+   report's ``unexplained.present`` is true and the gap of the selected
+   model is not called explained.
 
 The gap and the localization compare each residual with the model's noise
 terms, whose white level is the fit run's sample-level one
@@ -41,6 +46,7 @@ import numpy as np
 from gyrocomp.config import bind, load_config, settings_dict
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
+from gyrocomp.diagnose import unexplained as _unexplained
 from gyrocomp.diagnose.detectability import detection_limit
 from gyrocomp.diagnose.effects import EFFECTS, NEEDS_TEMPERATURE, Run, TemperatureScale, effect_params
 from gyrocomp.diagnose.select import Fitted, Problem, greedy, holdout_fit, residual_of, sample_arw
@@ -96,7 +102,15 @@ def get_config(path="diagnose") -> DiagnoseSettings:
     return bind(DiagnoseSettings, load_config(path).get("diagnose", {}), f"{path} [diagnose]")
 
 
-def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(), *, start_effects=(), callback=None) -> dict:
+def diagnose(
+    fit,
+    holdout=None,
+    settings: DiagnoseSettings = DiagnoseSettings(),
+    *,
+    start_effects=(),
+    callback=None,
+    unexplained_settings: _unexplained.UnexplainedSettings = _unexplained.UnexplainedSettings(),
+) -> dict:
     """Diagnose the gap between recordings and the calibrated baseline simulator.
 
     Parameters
@@ -112,13 +126,15 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
         part of the baseline, not candidates.
     callback : callable(done, total), optional
         Progress over candidate fits.
+    unexplained_settings : gyrocomp.diagnose.unexplained.UnexplainedSettings
+        The residual tests after selection.
 
     Returns
     -------
     dict
         The report body (see :func:`gyrocomp.diagnose.report.to_json`):
         ``selected_effects``, ``gap``, ``candidates``, ``localization``,
-        ``skipped``, ``models``.
+        ``skipped``, ``models``, ``unexplained``.
 
     Raises
     ------
@@ -159,6 +175,10 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
                 else detection_limit(runs, selected, effect, first_step[effect].spec.get(effect, {}), s.bic_margin, s.detection_power)
             )
         local = _localization(fit_p, hold_p, models, gaps, s, white)
+        labelled = [("fit", fit_p)] + ([("holdout", hold_p)] if hold_p is not None else [])
+        verdict = _unexplained.verdict(
+            labelled, selected, unexplained_settings, [gaps["baseline"][label]["residual"] for label, _ in labelled]
+        )
     order = [e for e in selected.order if e not in start_effects]
     return {
         "selected_effects": order,
@@ -172,9 +192,11 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
                     for run in ("fit", "holdout")
                     if g[run] is not None
                 },
+                **({"explained": not verdict["present"]} if name == "selected" else {}),
             }
             for name, g in gaps.items()
         },
+        "unexplained": verdict,
         "candidates": cand,
         "selection_steps": steps,
         "skipped": skipped,

@@ -31,9 +31,8 @@ def to_markdown(report: dict) -> str:
     names = ", ".join(i["name"] for i in report.get("inputs", []))
     if names:
         lines += [f"Recordings: {names}", ""]
-    lines.append(
-        "**Selected effects:** " + (", ".join(f"`{e}`" for e in sel) if sel else "none (the baseline explains the recording)")
-    )
+    lines.append("**Selected effects:** " + _selected_words(report, code=True))
+    lines += [""] + _unexplained_lines(report)
     lines += ["", "| model | gap fit | gap holdout |", "|---|---|---|"]
     for name in ("baseline", "selected"):
         g = report["gap"][name]
@@ -75,8 +74,11 @@ def summary_table(report: dict):
     from rich.table import Table
 
     sel = report["selected_effects"]
-    title = "selected: " + (", ".join(sel) if sel else "none (baseline explains the recording)")
-    table = Table(title=title)
+    un = report.get("unexplained") or {}
+    caption = None
+    if un.get("present"):
+        caption = "NOT EXPLAINED -- " + "; ".join(un["hints"]) + "; " + _size_words(un)
+    table = Table(title="selected: " + _selected_words(report), caption=caption)
     for col in ("model / candidate", "gap fit", "gap holdout", "delta BIC", "detection limit"):
         table.add_column(col, justify="left" if col in ("model / candidate", "detection limit") else "right")
     for name in ("baseline", "selected"):
@@ -87,6 +89,41 @@ def summary_table(report: dict):
         mark = " *" if effect in sel else ""
         table.add_row(f"+ {effect}{mark}", _fmt(c["gap_fit"]), _fmt(c["gap_holdout"]), _fmt(c["delta_bic"]), _limit(effect, c, sel))
     return table
+
+
+def _selected_words(report, code=False):
+    """The selected effects in words; never "explains" when the residual holds unexplained structure."""
+    sel = report["selected_effects"]
+    present = (report.get("unexplained") or {}).get("present", False)
+    if sel:
+        names = ", ".join(f"`{e}`" if code else e for e in sel)
+        return names + (" (the recording is NOT explained by them: see unexplained)" if present else "")
+    if present:
+        return "none from the vocabulary; the recording is NOT explained (see unexplained)"
+    return "none (the baseline explains the recording)"
+
+
+def _size_words(un):
+    """``rms ... deg/h (share of the gap ...)`` per run of the unexplained part."""
+    parts = []
+    for run, v in un.get("size", {}).items():
+        share = v.get("share_of_gap")
+        parts.append(f"{run}: rms {_fmt(v['rms_deg_h'])} deg/h" + (f", {100 * share:.0f} % of the gap" if share is not None else ""))
+    return "unexplained part " + "; ".join(parts)
+
+
+def _unexplained_lines(report):
+    """The markdown paragraph of the ``unexplained`` verdict."""
+    un = report.get("unexplained")
+    if not un:
+        return []
+    rate = f"family false-alarm rate {100 * un['family_alpha']:g} %"
+    if not un["present"]:
+        return [f"**Unexplained:** no structure the selected model does not predict ({rate})."]
+    lines = [f"**Unexplained: present** -- the residual holds structure the selected model does not predict ({rate}):", ""]
+    lines += [f"- {h}" for h in un["hints"]]
+    lines += ["", _size_words(un) + "."]
+    return lines
 
 
 def _noise_levels(report):

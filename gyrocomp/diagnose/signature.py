@@ -20,7 +20,7 @@ b. **innovations** -- the block-mean residual whitened under the model's
      ``chi^2_h`` [1]_;
    * trend: the score statistic of ``[1, t]`` in innovation space (a ramp
      or a curve in time that the noise absorbed), ``chi^2_2``;
-   * temperature: the score statistic of ``temperature_bins`` equal-count
+   * temperature: the score statistic of ``temperature_bins`` equal-width
      temperature-bin indicators, whitened (a function of temperature beyond
      the model's that the noise absorbed), ``chi^2`` of their rank beyond the
      design;
@@ -140,13 +140,13 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings()) 
         return Signature(False, (f"{term} has level 0 in the model",), {})
     designs = [p.design_blocks(model.spec)[0] for p in runs]
     free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
-    per_run = []
+    per_run, own = [], []
     for p, X in zip(runs, designs):
         # Each run is judged at its own maximum-likelihood levels: whether they agree is test (a).
-        own = fit_noise(p.y, X, p.basis, model.noise, free)[0]
-        per_run.append({"noise": own.datasheet_units(), **_run_tests(p, X, own, term, s)})
+        own.append(fit_noise(p.y, X, p.basis, model.noise, free)[0])
+        per_run.append({"noise": own[-1].datasheet_units(), **_run_tests(p, X, own[-1], term, s)})
     agreement = _agreement(runs, designs, model.noise, term, s) if len(runs) > 1 else None
-    replication = _replication(runs, designs, model.noise, s) if len(runs) > 1 else []
+    replication = _replication(runs, designs, own, s) if len(runs) > 1 else []
     n_tests = sum(len([k for k in out if k not in ("noise", "allan")]) + len(out["allan"]) for out in per_run)
     n_tests += len(replication) + (agreement is not None)
     alpha = s.family_alpha / max(n_tests, 1)
@@ -318,16 +318,21 @@ def step_scan(e, Xw, lower, min_blocks=4):
 
 
 def temperature_bins(temperature_c, n_bins):
-    """Indicator columns of `n_bins` equal-count temperature bins (a piecewise-constant function of T).
+    """Indicator columns of `n_bins` equal-width temperature bins over the range (empty ones dropped).
+
+    Equal widths, not equal counts: a soak holds many samples at one
+    temperature and would take several bins of its own.
 
     Examples
     --------
-    >>> temperature_bins(np.arange(8.0), 4).sum(axis=0).tolist()
-    [2.0, 2.0, 2.0, 2.0]
+    >>> temperature_bins(np.array([0.0, 0.5, 1.0, 3.9, 4.0]), 4).sum(axis=0).tolist()
+    [2.0, 1.0, 2.0]
     """
-    edges = np.quantile(temperature_c, np.linspace(0.0, 1.0, n_bins + 1)[1:-1])
-    idx = np.searchsorted(edges, temperature_c, side="right")
-    return (idx[:, None] == np.arange(n_bins)[None, :]).astype(float)
+    t = np.asarray(temperature_c, dtype=float)
+    edges = np.linspace(t.min(), t.max(), n_bins + 1)[1:-1]
+    idx = np.searchsorted(edges, t, side="right")
+    cols = (idx[:, None] == np.arange(n_bins)[None, :]).astype(float)
+    return cols[:, cols.sum(axis=0) > 0]
 
 
 def _allan_taus(problem, noise: NoiseModel, term, s: SignatureSettings):
@@ -380,18 +385,18 @@ def _timescales(problem, X, cov, lower, Xw, noise, term, s):
     return allan, extreme
 
 
-def _replication(runs, designs, noise: NoiseModel, s: SignatureSettings):
+def _replication(runs, designs, noises, s: SignatureSettings):
     """Test (a'): does one run's slow residual, as a function of time or of temperature, repeat in another run?
 
     For every ordered pair of runs the source run's GLS residual is averaged
     in ``time_bins`` equal bins of time since power-on (and in
-    ``temperature_bins`` equal-count temperature bins); that step function,
+    ``temperature_bins`` equal-width temperature bins); that step function,
     read at the target run's times (temperatures), is one whitened column
     of a score test on the target run. The source's noise is independent of
     the target's, so the statistic is ``chi^2_1`` when the model holds.
     """
     prepared = []
-    for p, X in zip(runs, designs):
+    for p, X, noise in zip(runs, designs, noises):
         cov = p.basis.covariance(noise)
         e, Xw, lower = innovations(p.y, X, cov)
         beta, *_ = linalg.lstsq(Xw, linalg.solve_triangular(lower, p.y, lower=True, check_finite=False), cond=1e-12)
@@ -407,7 +412,7 @@ def _replication(runs, designs, noise: NoiseModel, s: SignatureSettings):
                 continue
             shapes = {"time": _binned(ta, ra, tb, np.linspace(0.0, min(ta[-1], tb[-1]), s.time_bins + 1)[1:-1])}
             if Ta is not None and Tb is not None:
-                edges = np.quantile(Ta, np.linspace(0.0, 1.0, s.temperature_bins + 1)[1:-1])
+                edges = np.linspace(Ta.min(), Ta.max(), s.temperature_bins + 1)[1:-1]
                 shapes["temperature"] = _binned(Ta, ra, Tb, edges)
             for of, g in shapes.items():
                 gw = linalg.solve_triangular(lowb, g[:, None], lower=True, check_finite=False)

@@ -1,0 +1,167 @@
+"""The "unexplained" verdict (gyrocomp.diagnose.unexplained) on constructed cases.
+
+Each residual test gets a recording with the structure it looks for (it must
+be flagged, and located) and clean recordings (they must not be flagged more
+often than the stated false-alarm rate allows). Recordings are numpy draws:
+a static gyro, white noise, a cubic in temperature, on a 2 h oven profile
+of 1 degC/min ramps and soaks (25, 50, 20, 35 degC) at 1 Hz (720 blocks of 10 s); the model is the baseline
+(offset + cubic + white noise) fitted by :func:`gyrocomp.diagnose.select.fit_baseline`.
+"""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from gyrocomp.diagnose import DiagnoseSettings
+from gyrocomp.diagnose import unexplained as ux
+from gyrocomp.diagnose.effects import Run, TemperatureScale
+from gyrocomp.diagnose.select import Problem, extend, fit_baseline
+
+N = 0.005  # deg/s/sqrt(Hz)
+HOURS = 2.0
+
+
+def _recording(seed, kind="none", amp=0.0, rrw=0.0):
+    rng = np.random.default_rng(seed)
+    n = int(HOURS * 3600)
+    t = np.arange(n, dtype=float)
+    temp = np.interp(t / 60.0, [0, 10, 35, 50, 80, 90, 105, 120], [25, 25, 50, 50, 20, 20, 35, 35])
+    sigma = np.full(n, N)
+    if kind == "noise_samples":
+        sigma[n // 2 :] *= amp
+    x = sigma * rng.standard_normal(n) + 0.002 * ((temp - 35.0) / 15.0) ** 3
+    if rrw:
+        x += np.cumsum(rrw * rng.standard_normal(n))
+    rate = np.gradient(temp)
+    shapes = {
+        "temperature": lambda: np.exp(-0.5 * ((temp - 42.0) / 2.0) ** 2),
+        "heating_cooling": lambda: np.sign(rate) * (temp - 20.0) / 30.0,
+        "power_on": lambda: np.exp(-t / 240.0) * (t < 900.0),
+        "time": lambda: np.sin(np.pi * t / t[-1]) * np.sin(2.0 * np.pi * t / t[-1]),
+        "step": lambda: (t > 0.4 * t[-1]).astype(float),
+        "spectral_line": lambda: np.sin(2.0 * np.pi * t / 600.0),
+    }
+    if kind in shapes:
+        x += amp * shapes[kind]()
+    if kind == "noise_blocks":
+        # block-constant wander (10 s blocks) in the second half only: the block means' noise doubles
+        blocks = np.repeat(rng.standard_normal(n // 10), 10) * amp * N / np.sqrt(10.0)
+        x += np.where(t >= n // 2, blocks, 0.0)
+    return t, x, temp
+
+
+def _verdict(kind="none", amp=0.0, seed=0, terms=(), rrw=0.0):
+    scale = None
+    runs = []
+    for label, k in (("fit", seed), ("holdout", seed + 500)):
+        t, x, temp = _recording(k, kind, amp, rrw)
+        scale = scale or TemperatureScale.of(temp)
+        runs.append((label, Problem(Run(label, t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), scale, 3)))
+    model = fit_baseline(runs[0][1])
+    for term in terms:
+        model = extend(runs[0][1], model, term)
+    residuals = [p.run.rate_dps - p.design_blocks(model.spec)[0].mean() for _, p in runs]
+    return ux.verdict(runs, model, baseline_residuals=residuals)
+
+
+def test_config_matches_defaults():
+    assert ux.get_config() == ux.UnexplainedSettings()
+
+
+@pytest.mark.parametrize(
+    ("kind", "amp", "named", "check"),
+    [
+        ("temperature", 0.002, ("temperature",), lambda w: w["temperature_c"][0] - 2.5 < 42.0 < w["temperature_c"][1] + 2.5),
+        ("heating_cooling", 0.001, ("heating_cooling",), lambda w: w["regime"] in ("heating", "cooling")),
+        # a settling after power-on is as well described by an early step
+        ("power_on", 0.004, ("power_on", "step"), lambda w: w["time_s"][0] < 900.0),
+        # a slow drift in time is as well described by a step in its middle
+        ("time", 0.002, ("time", "step"), lambda w: w["time_s"][1] <= HOURS * 3600.0),
+        ("step", 0.001, ("step",), lambda w: abs(np.mean(w["time_s"]) - 0.4 * HOURS * 3600.0) < 120.0),
+        ("spectral_line", 0.0006, ("spectral_line",), lambda w: w["timescale_s"] == pytest.approx(600.0, rel=0.05)),
+        ("noise_blocks", 2.0, ("noise_blocks",), lambda w: w["time_s"][0] >= HOURS * 3600.0 / 2.0 - 1.0),
+        ("noise_samples", 1.5, ("noise_samples",), lambda w: w["time_s"][0] >= HOURS * 3600.0 / 2.0 - 1.0),
+    ],
+)
+def test_structure_is_flagged_and_located(kind, amp, named, check):
+    v = _verdict(kind, amp, seed=3)
+    assert v["present"]
+    assert v["tests"]["fit"][kind]["rejected"] or v["tests"]["holdout"][kind]["rejected"]
+    found = [w for w in v["where"] if w["test"] in named]
+    assert found, v["hints"]
+    assert check(found[0]), found[0]
+    assert v["hints"]
+    if not kind.startswith("noise_"):
+        assert v["size"]["fit"]["rms_deg_h"] > 0.0
+        assert 0.0 < v["size"]["fit"]["share_of_gap"] <= 1.0
+
+
+def test_step_size_is_measured():
+    v = _verdict("step", 0.001, seed=4)
+    step = [h for h in v["hints"] if "step of" in h]
+    assert step, v["hints"]
+    # a step of 0.001 deg/s = 3.6 deg/h: its rms about its mean is 3.6 * sqrt(0.4 * 0.6) deg/h
+    assert v["size"]["fit"]["rms_deg_h"] == pytest.approx(3.6 * np.sqrt(0.4 * 0.6), rel=0.15)
+
+
+@pytest.mark.parametrize(("terms", "rrw"), [((), 0.0), (("rate_random_walk",), 0.5 / 3600.0 / 60.0 * 3.0)])
+def test_clean_recordings_are_not_flagged(terms, rrw):
+    # family false-alarm rate 1 %: over 8 clean pairs at most one false alarm (P(>= 2) < 0.3 %)
+    flagged = [_verdict(seed=s, terms=terms, rrw=rrw)["present"] for s in range(20, 28)]
+    assert sum(flagged) <= 1
+
+
+def test_holm():
+    assert ux.holm([0.01, 0.02, 0.5], 0.05).tolist() == [True, True, False]
+    assert ux.holm([0.03, 0.03, 0.03], 0.05).tolist() == [False, False, False]
+
+
+def test_fisher_g_false_alarm_rate():
+    rng = np.random.default_rng(0)
+    p = np.array([ux.fisher_g(rng.standard_normal(256))[1] for _ in range(1000)])
+    assert np.mean(p < 0.05) <= 0.05 + 3.0 * np.sqrt(0.05 * 0.95 / 1000)
+    assert np.mean(p < 0.05) > 0.02  # the first-term bound is tight in the tail
+
+
+def test_bartlett_segments_calibrated_and_sized():
+    rng = np.random.default_rng(1)
+    p = [ux.bartlett_segments(rng.standard_normal(800), 8)[1] for _ in range(500)]
+    assert stats.kstest(p, "uniform").pvalue > 0.01
+    x = rng.standard_normal(800)
+    x[400:] *= 2.0
+    _, p, std = ux.bartlett_segments(x, 8)
+    assert p < 1e-10 and std[-1] / std[0] == pytest.approx(2.0, rel=0.3)
+
+
+def _report(present, selected):
+    parts = {"fit": {"noise_level": 0.1}, "holdout": {"noise_level": 0.1}}
+    un = {
+        "present": present,
+        "family_alpha": 0.01,
+        "where": [{"run": "fit", "test": "step", "p": 1e-9, "time_s": [100.0, 120.0]}] if present else [],
+        "hints": ["fit: a step of +3.6 deg/h at 0.03 h"] if present else [],
+        "size": {"fit": {"rms_deg_h": 1.7, "share_of_gap": 0.8}},
+    }
+    return {
+        "selected_effects": selected,
+        "gap": {m: {"fit": 0.0, "holdout": 0.0, "parts": parts} for m in ("baseline", "selected")},
+        "candidates": {},
+        "localization": {},
+        "unexplained": un,
+    }
+
+
+@pytest.mark.parametrize("selected", [[], ["rate_random_walk"]])
+def test_summary_never_calls_an_unexplained_recording_explained(selected):
+    from rich.console import Console
+
+    from gyrocomp.diagnose.report import summary_table, to_markdown
+
+    md = to_markdown(_report(True, selected))
+    assert "explains the recording" not in md and "NOT explained" in md and "a step of +3.6 deg/h" in md
+    assert "rms 1.700 deg/h, 80 % of the gap" in md
+    console = Console(width=200, record=True)
+    console.print(summary_table(_report(True, selected)))
+    text = console.export_text()
+    assert "explains the recording" not in text and "NOT EXPLAINED" in text
+    assert "the baseline explains the recording" in to_markdown(_report(False, []))
