@@ -113,9 +113,9 @@ class AllanConfig:
 
 def get_config(path: str | os.PathLike = "allan") -> AllanConfig:
     """Read the ``[allan]`` table of a TOML config (default ``configs/allan.toml``)."""
-    from gyrocomp.config import bind, load_config
+    from gyrocomp.config import bind, check_tables, load_config
 
-    return bind(AllanConfig, load_config(path).get("allan"), f"{path} [allan]")
+    return bind(AllanConfig, check_tables(load_config(path), ("allan",), str(path)).get("allan"), f"{path} [allan]")
 
 
 @dataclasses.dataclass

@@ -17,7 +17,7 @@ from typing import Any, Iterable, TypeVar
 
 from gyrocomp.errors import InputError
 
-__all__ = ["CONFIG_DIR", "load_config", "apply_overrides", "bind", "settings_dict"]
+__all__ = ["CONFIG_DIR", "PIPELINE_TABLES", "load_config", "apply_overrides", "check_tables", "bind", "settings_dict"]
 
 def _config_dir() -> Path:
     """``configs/`` of the source checkout this package runs from, else the installed package data."""
@@ -32,6 +32,9 @@ CONFIG_DIR = _config_dir()
 
 In a checkout, the top-level ``configs/``; in an installed wheel, the same
 files as package data (``gyrocomp/configs/``, see ``setup.py``)."""
+
+PIPELINE_TABLES = ("pipeline", "rate", "model", "decompose", "classify", "denoise")
+"""Top-level tables of a pipeline config (``configs/pe-lcd-anfis.toml`` and its kin)."""
 
 T = TypeVar("T")
 
@@ -79,6 +82,25 @@ def apply_overrides(config: dict, assignments: Iterable[str]) -> dict:
                 raise InputError(f"--set {assignment!r}: {part!r} is not a table")
         node[parts[-1]] = value
     return result
+
+
+def check_tables(config: dict, known: Iterable[str], source: str) -> dict:
+    """Refuse a top-level table (or ``--set`` prefix) that no stage reads: a typo would be ignored.
+
+    Returns `config` unchanged.
+
+    Raises
+    ------
+    InputError
+        Naming the file (or ``--set``), the unknown tables and the known ones.
+    """
+    known = tuple(known)
+    unknown = sorted(set(config) - set(known))
+    if unknown:
+        raise InputError(
+            f"{source}: unknown table {', '.join(unknown)}; this config has [{'], ['.join(known)}]"
+        )
+    return config
 
 
 def bind(cls: type[T], table: dict | None, source: str) -> T:

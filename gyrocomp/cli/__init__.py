@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import importlib
 import os
+import signal
 
-from gyrocomp.cli._app import app
+from gyrocomp.cli._app import app, raise_on_sigterm
 
 _COMMANDS = ("simulate", "allan", "decompose", "train", "compensate", "export", "run", "batch", "diagnose", "classify")
 """Command modules of this package; each registers its commands on ``app``."""
@@ -26,9 +27,13 @@ def main() -> None:
     processes (``--workers``), so the command line asks for one BLAS thread
     unless the environment already says otherwise. This must happen before
     numpy loads.
+
+    SIGTERM (``kill``, a cron timeout, a CI job cancelled) unwinds as
+    Ctrl-C does, so no half-written temporary file is left behind.
     """
     for variable in _BLAS_THREAD_VARIABLES:
         os.environ.setdefault(variable, "1")
+    signal.signal(signal.SIGTERM, raise_on_sigterm)
     app()
 
 

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import signal
 import sys
+import traceback
 from pathlib import Path
 from typing import Annotated, Callable, Iterator, Optional
 
@@ -60,6 +62,17 @@ def _main(
     ctx.obj = State(quiet=quiet, debug=debug)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is so that it unwinds as Ctrl-C does."""
+
+    signum = signal.SIGTERM
+
+
+def raise_on_sigterm(signum, frame) -> None:
+    """SIGTERM handler: unwind (atomic writes remove their temporary files), then exit 143."""
+    raise Terminated()
+
+
 def state(ctx: typer.Context) -> State:
     """The global options of this invocation."""
     return ctx.obj if isinstance(ctx.obj, State) else State()
@@ -80,7 +93,9 @@ def report_errors(ctx: typer.Context) -> Iterator[None]:
     """Turn a library error into one line on stderr and its exit code.
 
     Exit codes: 2 bad input or usage, 3 a CI threshold crossed, 1 anything
-    else. With ``--debug`` the exception propagates with its traceback.
+    else; 130 on Ctrl-C and 143 on SIGTERM (:class:`Terminated`), after the
+    atomic writes under way have removed their temporary files. With
+    ``--debug`` the traceback is printed too, and the exit code stays.
     """
     from gyrocomp.errors import GyrocompError
 
@@ -88,13 +103,13 @@ def report_errors(ctx: typer.Context) -> Iterator[None]:
         yield
     except typer.Exit:
         raise
-    except KeyboardInterrupt:
-        print("gyrocomp: interrupted", file=sys.stderr)
-        raise typer.Exit(130)
+    except KeyboardInterrupt as err:
+        print(f"gyrocomp: {'terminated' if isinstance(err, Terminated) else 'interrupted'}", file=sys.stderr)
+        raise typer.Exit(128 + getattr(err, "signum", signal.SIGINT))
     except Exception as err:
-        if state(ctx).debug:
-            raise
         code = err.exit_code if isinstance(err, GyrocompError) else 1
+        if state(ctx).debug:
+            traceback.print_exc()
         message = str(err).strip().replace("\n", " ") or type(err).__name__
         if not isinstance(err, GyrocompError):
             message = f"{type(err).__name__}: {message}"

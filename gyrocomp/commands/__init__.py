@@ -14,19 +14,43 @@ Stages
 ------
 ``decompose``, ``classify``, ``train``, ``compensate``, ``allan``,
 ``simulate``, ``diagnose``, ``run`` (:data:`STAGES`).
+
+Outputs never overwrite inputs
+------------------------------
+Each stage's ``to_files`` is wrapped by :func:`guarded` with a function
+that lists the paths it writes (the artefact, its sidecar, the plot) and
+the folders it fills. Before anything is read or written,
+:func:`check_paths` compares them, resolved and following links (hard
+links too), with every file the stage reads: its positional inputs and
+every option naming an existing file (a holdout, a model, a config). A
+clash exits 2 naming both paths; an output named twice does too.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib
+import inspect
 import os
 import threading
 from pathlib import PurePath
 from types import ModuleType
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
-__all__ = ["STAGES", "stage", "from_params", "param_names", "column_spec", "to_settings", "from_settings", "PLOT_LOCK"]
+__all__ = [
+    "STAGES",
+    "stage",
+    "from_params",
+    "param_names",
+    "column_spec",
+    "to_settings",
+    "from_settings",
+    "PLOT_LOCK",
+    "Folder",
+    "guarded",
+    "check_paths",
+]
 
 STAGES = ("decompose", "classify", "train", "compensate", "allan", "simulate", "diagnose", "run")
 """The stage modules of this package, in pipeline order."""
@@ -48,6 +72,81 @@ def stage(name: str) -> ModuleType:
     if name not in STAGES:
         raise InputError(f"unknown stage {name!r}; choose one of {', '.join(STAGES)}")
     return importlib.import_module(f"{__name__}.{name}")
+
+
+class Folder(str):
+    """A folder a stage fills (``run --out DIR``): no input may lie inside it."""
+
+
+def guarded(written: Callable[[Any, Any], Sequence[Any]]):
+    """Wrap a stage's ``to_files`` so that :func:`check_paths` runs first.
+
+    Parameters
+    ----------
+    written : callable(out, options) -> sequence of path-like, Folder or None
+        Every path the stage writes for these arguments (``None`` and ``-``
+        are skipped), and every :class:`Folder` it fills.
+    """
+
+    def decorate(to_files):
+        default = inspect.signature(to_files).parameters["options"].default
+
+        @functools.wraps(to_files)
+        def run(inputs, out, options=default, **kwargs):
+            check_paths(inputs, options, written(out, options))
+            return to_files(inputs, out, options, **kwargs)
+
+        run.written = written
+        return run
+
+    return decorate
+
+
+def check_paths(inputs: Sequence[Any], options: Any, outputs: Sequence[Any]) -> None:
+    """Refuse outputs that are inputs, or that are named twice, before anything is written.
+
+    Raises
+    ------
+    InputError
+        Naming the output and the input it would overwrite (exit 2).
+    """
+    from gyrocomp.errors import InputError
+
+    written = [p for p in outputs if p is not None and str(p) != "-"]
+    reads = [p for p in inputs if str(p) != "-"]
+    for field in dataclasses.fields(options):
+        for value in _paths_in(getattr(options, field.name)):
+            if value not in written and os.path.isfile(value):
+                reads.append(value)
+    seen: dict = {}
+    for path in written:
+        key = _identity(path)
+        if key in seen:
+            raise InputError(f"{path}: named as two outputs ({seen[key]} too); choose another path for one of them")
+        seen[key] = path
+    folders = [os.path.realpath(p) for p in written if isinstance(p, Folder)]
+    for path in reads:
+        clash = seen.get(_identity(path))
+        if clash is None:
+            real = os.path.realpath(path)
+            clash = next((f for f in folders if os.path.commonpath([f, real]) == f), None)
+        if clash is not None:
+            raise InputError(f"{clash}: the output would overwrite the input {path}; choose another output path")
+
+
+def _paths_in(value) -> list:
+    """The path-like strings in an option value (a path, or a tuple of them)."""
+    values = value if isinstance(value, (tuple, list)) else (value,)
+    return [os.fspath(v) for v in values if isinstance(v, (str, os.PathLike)) and str(v) not in ("", "-")]
+
+
+def _identity(path) -> tuple:
+    """What makes two paths one file: device and inode when it exists (links followed), else the resolved path."""
+    try:
+        stat = os.stat(path)
+    except OSError:
+        return ("path", os.path.realpath(path))
+    return ("inode", stat.st_dev, stat.st_ino)
 
 
 def column_spec(params: Mapping[str, Any]):

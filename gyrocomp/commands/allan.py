@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 from typing import Optional, Sequence
 
+from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files", "check"]
@@ -45,6 +46,12 @@ class Options:
     resample: bool = False
 
 
+def written(out, options) -> list:
+    """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
+    return [out, options.plot]
+
+
+@guarded(written)
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options()) -> list:
     """Read recordings, analyse one column of each and write ``allan.json`` (and the plot).
 

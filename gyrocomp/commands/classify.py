@@ -6,6 +6,8 @@ import dataclasses
 import os
 from typing import Optional, Sequence
 
+from gyrocomp.commands import guarded
+
 __all__ = ["Options", "to_files"]
 
 
@@ -39,13 +41,19 @@ class Options:
         table, source = {}, "defaults [classify]"
         if self.config is not None or self.overrides:
             whole = cfg.load_config(self.config) if self.config is not None else {}
-            whole = cfg.apply_overrides(whole, self.overrides)
+            whole = cfg.check_tables(cfg.apply_overrides(whole, self.overrides), cfg.PIPELINE_TABLES, self.config or "--set")
             table, source = dict(whole.get("classify", {})), f"{self.config or '--set'} [classify]"
         if self.entropy is not None:
             table, source = {**table, "entropy": self.entropy}, f"--entropy {self.entropy}"
         return cfg.bind(ClassifySettings, table, source)
 
 
+def written(out, options) -> list:
+    """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
+    return [out, options.plot]
+
+
+@guarded(written)
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options()) -> list[dict]:
     """Classify the components of ``inputs = [components.parquet]`` and write ``classes.json`` (:func:`write`)."""
     (components,) = inputs

@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
+from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files", "write"]
@@ -51,7 +52,8 @@ class Options:
 
         table, source = {}, "[decompose]"
         if self.config is not None:
-            table = dict(cfg.load_config(self.config).get("decompose", {}))
+            whole = cfg.check_tables(cfg.load_config(self.config), cfg.PIPELINE_TABLES, self.config)
+            table = dict(whole.get("decompose", {}))
             source = f"{self.config} [decompose]"
         table = cfg.apply_overrides({"decompose": table}, [f"decompose.{a}" for a in self.overrides])["decompose"]
         if self.method is not None:
@@ -61,6 +63,12 @@ class Options:
         return cfg.bind(DecomposeSettings, table, source)
 
 
+def written(out, options) -> list:
+    """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
+    return [out] if str(out) == "-" else [out, Path(out).with_suffix(".json")]
+
+
+@guarded(written)
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options(), *, progress: Callable[[int, int], None] | None = None):
     """Read a recording (``inputs = [recording]``), decompose its rate and write the artefacts (:func:`write`).
 

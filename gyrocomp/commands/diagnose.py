@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
+from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
@@ -42,6 +43,12 @@ class Options:
     resample: bool = False
 
 
+def written(out, options) -> list:
+    """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
+    return [out, options.markdown, options.plot]
+
+
+@guarded(written)
 def to_files(
     inputs: Sequence[str | os.PathLike],
     out: str | os.PathLike,

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Optional, Sequence
 
+from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
@@ -39,6 +40,12 @@ class Options:
     columns: ColumnSpec = ColumnSpec()
 
 
+def written(out, options) -> list:
+    """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
+    return [out]
+
+
+@guarded(written)
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options()) -> tuple:
     """Read a model (``inputs = [model.json]``), write it in ``options.fmt`` atomically (``-``: stdout).
 

@@ -28,8 +28,8 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from gyrocomp import artefacts, recordings
-from gyrocomp.config import apply_overrides, bind, load_config, settings_dict
-from gyrocomp.errors import InputError
+from gyrocomp.commands import Folder, guarded
+from gyrocomp.config import PIPELINE_TABLES, apply_overrides, bind, check_tables, load_config, settings_dict
 from gyrocomp.pipeline import evaluate
 from gyrocomp.pipeline.compensate import compensate, load_model
 from gyrocomp.pipeline.settings import EvaluateSettings, RunSettings, SignalSettings, pipeline_settings
@@ -47,10 +47,7 @@ Progress = Callable[[str, int, int], None]
 def load_run_config(path: str | os.PathLike, overrides=()) -> tuple[RunSettings, EvaluateSettings, SignalSettings, dict]:
     """Read a run config: its ``[run]``, ``[evaluate]`` and ``[signal]`` tables."""
     source = str(path)
-    config = apply_overrides(load_config(path), overrides)
-    unknown = sorted(set(config) - {"run", "evaluate", "signal"})
-    if unknown:
-        raise InputError(f"{source}: unknown table {', '.join(unknown)}; a run config has [run], [evaluate], [signal]")
+    config = check_tables(apply_overrides(load_config(path), overrides), ("run", "evaluate", "signal"), source)
     return (
         bind(RunSettings, config.get("run"), f"{source} [run]"),
         bind(EvaluateSettings, config.get("evaluate"), f"{source} [evaluate]"),
@@ -84,6 +81,12 @@ class Options:
     columns: recordings.ColumnSpec = recordings.ColumnSpec()
 
 
+def written(out, options) -> list:
+    """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
+    return [Folder(out)]
+
+
+@guarded(written)
 def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, options: Options = Options(), *, progress: Progress | None = None) -> dict:
     """Train, compensate and score every method of a run config.
 
@@ -246,7 +249,7 @@ def _train_method(config, source, name, train_rec, folder: Path, seed, workers, 
 
 def _method_config(method: str, overrides) -> tuple[dict, str, str]:
     mine = [o.partition(":")[2] for o in overrides if o.partition(":")[0] == method]
-    config = apply_overrides(load_config(method), mine)
+    config = check_tables(apply_overrides(load_config(method), mine), PIPELINE_TABLES, method)
     name = Path(method).stem
     return config, method, name
 

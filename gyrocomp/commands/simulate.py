@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
+from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
@@ -44,6 +45,12 @@ class Options:
     columns: ColumnSpec = ColumnSpec()
 
 
+def written(out, options) -> list:
+    """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
+    return [out]
+
+
+@guarded(written)
 def to_files(
     inputs: Sequence[str | os.PathLike],
     out: str | os.PathLike,

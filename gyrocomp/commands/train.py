@@ -6,6 +6,7 @@ import dataclasses
 import os
 from typing import Sequence
 
+from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
@@ -34,6 +35,12 @@ class Options:
     columns: ColumnSpec = ColumnSpec()
 
 
+def written(out, options) -> list:
+    """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
+    return [out]
+
+
+@guarded(written)
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options()) -> dict:
     """Fit the drift models of a pipeline and write ``model.json``.
 
@@ -52,13 +59,13 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         The model as written.
     """
     from gyrocomp import artefacts, recordings
-    from gyrocomp.config import apply_overrides, load_config
+    from gyrocomp.config import PIPELINE_TABLES, apply_overrides, check_tables, load_config
     from gyrocomp.errors import InputError
     from gyrocomp.pipeline.settings import pipeline_settings
     from gyrocomp.artefacts import file_record
     from gyrocomp.pipeline.train import train_direct, train_parallel
 
-    cfg = apply_overrides(load_config(options.config), options.overrides)
+    cfg = check_tables(apply_overrides(load_config(options.config), options.overrides), PIPELINE_TABLES, options.config)
     pipeline = pipeline_settings(cfg, options.config)
     source, *rest = inputs
     if pipeline.parallel:

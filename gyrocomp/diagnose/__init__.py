@@ -43,7 +43,7 @@ import math
 
 import numpy as np
 
-from gyrocomp.config import bind, load_config, settings_dict
+from gyrocomp.config import bind, check_tables, load_config, settings_dict
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
 from gyrocomp.diagnose import unexplained as _unexplained
@@ -99,7 +99,7 @@ class DiagnoseSettings:
 
 def get_config(path="diagnose") -> DiagnoseSettings:
     """Bind the ``[diagnose]`` table of a TOML file (default: the shipped ``configs/diagnose.toml``)."""
-    return bind(DiagnoseSettings, load_config(path).get("diagnose", {}), f"{path} [diagnose]")
+    return bind(DiagnoseSettings, check_tables(load_config(path), ("diagnose",), str(path)).get("diagnose", {}), f"{path} [diagnose]")
 
 
 def diagnose(

@@ -1,0 +1,156 @@
+"""Hostile inputs at the command boundary: a table of cases, each with its exit code and message (issue 21).
+
+Every case runs the real command line in a folder of its own and checks
+three things: the exit code, a one-line message on stderr that names the
+file (and, where it applies, the field), and that every file that was
+there before is unchanged and nothing new was written (no half-written
+artefact, no hidden temporary file).
+
+A stage added to :data:`gyrocomp.commands.STAGES` inherits the output-path
+guard: :func:`test_every_stage_is_guarded` fails until its ``to_files`` is
+wrapped by :func:`gyrocomp.commands.guarded` with every path it writes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from gyrocomp import commands
+from gyrocomp.cli import app
+
+
+def _recording(path: Path, n: int = 600) -> Path:
+    rng = np.random.default_rng(0)
+    t = np.arange(n, dtype=float)
+    frame = pd.DataFrame({"time": t, "rate": 0.01 * rng.standard_normal(n), "temperature": 20.0 + t / 60.0})
+    if path.suffix == ".csv":
+        frame.to_csv(path, index=False)
+    else:
+        frame.to_parquet(path)
+    return path
+
+
+def _setup(folder: Path) -> None:
+    _recording(folder / "x.parquet")
+    _recording(folder / "h.parquet")
+    _recording(folder / "real.csv")
+    (folder / "model.json").write_text('{"schema": {"name": "gyrocomp.model"}}\n')
+    (folder / "out").mkdir()
+    _recording(folder / "out" / "train.parquet")
+    os.symlink("x.parquet", folder / "link.parquet")
+    os.link(folder / "x.parquet", folder / "hard.parquet")
+
+
+# (case id, argv, exit code, regex the one stderr line must match)
+CASES = [
+    ("allan-onto-input", ["allan", "x.parquet", "--out", "x.parquet"], 2, r"x\.parquet: the output would overwrite the input x\.parquet"),
+    ("allan-onto-symlinked-input", ["allan", "link.parquet", "--out", "x.parquet"], 2, r"overwrite the input link\.parquet"),
+    ("allan-onto-hard-linked-input", ["allan", "hard.parquet", "--out", "x.parquet"], 2, r"overwrite the input hard\.parquet"),
+    ("allan-plot-onto-input", ["allan", "x.parquet", "--out", "a.json", "--plot", "x.parquet"], 2, r"overwrite the input x\.parquet"),
+    ("allan-plot-equals-out", ["allan", "x.parquet", "--out", "a.json", "--plot", "a.json"], 2, r"a\.json: named as two outputs"),
+    ("compensate-sidecar-onto-model", ["compensate", "x.parquet", "model.json", "--out", "model.parquet"], 2, r"model\.json: the output would overwrite the input model\.json"),
+    ("compensate-onto-recording", ["compensate", "x.parquet", "model.json", "--out", "x.parquet"], 2, r"overwrite the input x\.parquet"),
+    ("decompose-onto-input", ["decompose", "x.parquet", "--out", "x.parquet"], 2, r"overwrite the input x\.parquet"),
+    ("classify-onto-input", ["classify", "x.parquet", "--out", "x.parquet"], 2, r"overwrite the input x\.parquet"),
+    ("train-onto-input", ["train", "x.parquet", "--config", "polynomial", "--out", "x.parquet"], 2, r"overwrite the input x\.parquet"),
+    ("simulate-onto-profile", ["simulate", "--profile", "real.csv", "--out", "real.csv"], 2, r"overwrite the input real\.csv"),
+    ("diagnose-onto-holdout", ["diagnose", "x.parquet", "--holdout", "h.parquet", "--out", "h.parquet"], 2, r"overwrite the input h\.parquet"),
+    ("export-onto-model", ["export", "model.json", "--format", "json-plain", "--out", "model.json"], 2, r"overwrite the input model\.json"),
+    ("run-into-input-folder", ["run", "compare", "out/train.parquet", "--out", "out"], 2, r"out: the output would overwrite the input out/train\.parquet"),
+]
+
+
+def _snapshot(folder: Path) -> dict:
+    return {
+        str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else "dir"
+        for p in sorted(folder.rglob("*"))
+    }
+
+
+@pytest.mark.parametrize("argv, code, message", [c[1:] for c in CASES], ids=[c[0] for c in CASES])
+def test_hostile_case(tmp_path, monkeypatch, argv, code, message):
+    _setup(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    before = _snapshot(tmp_path)
+    result = CliRunner().invoke(app, argv)
+    assert result.exit_code == code, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("gyrocomp: "), lines
+    assert re.search(message, lines[0]), lines[0]
+    assert _snapshot(tmp_path) == before
+
+
+def test_every_stage_is_guarded():
+    """Each stage declares what it writes, and every output option (plot, markdown) is among it."""
+    for name in commands.STAGES:
+        module = commands.stage(name)
+        written = getattr(module.to_files, "written", None)
+        assert written is not None, f"commands.{name}.to_files is not wrapped by commands.guarded"
+        outputs = {f.name for f in dataclasses.fields(module.Options) if f.name in ("plot", "markdown")}
+        options = module.Options(**{f: f"{f}.out" for f in outputs})
+        listed = {os.fspath(p) for p in written("main.out", options) if p is not None}
+        assert {f"{f}.out" for f in outputs} <= listed, (name, listed)
+
+
+def test_debug_keeps_the_exit_code_and_shows_the_traceback(tmp_path):
+    """``--debug`` adds the traceback; a bad input still exits 2, not 1."""
+    result = CliRunner().invoke(app, ["--debug", "allan", str(tmp_path / "missing.csv"), "--out", str(tmp_path / "a.json")])
+    assert result.exit_code == 2
+    assert "Traceback" in result.stderr and "gyrocomp: " in result.stderr.strip().splitlines()[-1]
+
+
+def test_sigterm_during_a_write_leaves_no_temporary_file(tmp_path):
+    """SIGTERM arriving inside an atomic write unwinds like Ctrl-C: exit 143, the temporary file removed."""
+    import subprocess
+    import sys
+
+    rec = _recording(tmp_path / "x.parquet")
+    out = tmp_path / "out"
+    script = (
+        "import os, signal, sys\n"
+        "import gyrocomp.cli as cli\n"
+        "real_fsync = os.fsync\n"
+        "def fsync(fd):\n"
+        "    os.kill(os.getpid(), signal.SIGTERM)\n"
+        "    real_fsync(fd)\n"
+        "os.fsync = fsync\n"
+        "sys.argv = ['gyrocomp', 'allan', sys.argv[1], '--out', sys.argv[2]]\n"
+        "cli.main()\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script, str(rec), str(out / "allan.json")], capture_output=True, text=True)
+    assert proc.returncode == 143, proc.stderr
+    assert proc.stderr.strip().splitlines() == ["gyrocomp: terminated"]
+    assert list(out.iterdir()) == []
+
+
+CONFIG_CASES = [
+    # (case id, argv, the one line must match)
+    ("set-typo-in-table", ["train", "x.parquet", "--config", "polynomial", "--set", "modle.drift.degree=1", "--out", "m.json"], r"polynomial: unknown table modle; this config has \[pipeline\]"),
+    ("unknown-table-in-file", ["train", "x.parquet", "--config", "bad.toml", "--out", "m.json"], r"bad\.toml: unknown table piepline"),
+    ("allan-config-typo", ["allan", "x.parquet", "--config", "bad_allan.toml", "--out", "a.json"], r"bad_allan\.toml: unknown table alan"),
+    ("decompose-config-typo", ["decompose", "x.parquet", "--config", "bad.toml", "--out", "c.parquet"], r"bad\.toml: unknown table piepline"),
+]
+
+
+@pytest.mark.parametrize("argv, message", [c[1:] for c in CONFIG_CASES], ids=[c[0] for c in CONFIG_CASES])
+def test_config_typos_are_refused(tmp_path, monkeypatch, argv, message):
+    """Unknown top-level tables and ``--set`` keys with a typo in the table name exit 2 naming the key."""
+    _setup(tmp_path)
+    (tmp_path / "bad.toml").write_text('[piepline]\nkind = "polynomial"\n')
+    (tmp_path / "bad_allan.toml").write_text("[alan]\ntaus = \"octave\"\n")
+    monkeypatch.chdir(tmp_path)
+    before = _snapshot(tmp_path)
+    result = CliRunner().invoke(app, argv)
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and re.search(message, lines[0]), lines
+    assert _snapshot(tmp_path) == before
