@@ -70,7 +70,7 @@ def test_threshold_exits_3_after_writing(white_csv, tmp_path):
     proc = _run(white_csv, "--rate-col", "w", "--time-col", "t_ms", "--time-unit", "ms", "--out", out, "--max-arw", "0.5")
     assert proc.returncode == 3
     line = proc.stderr.strip().splitlines()[-1]
-    assert line.startswith("gyrocomp: white.csv `rate`: arw = ") and "--max-arw 0.5" in line
+    assert line.startswith("gyrocomp: white.csv `w`: arw = ") and "--max-arw 0.5" in line  # the axis keeps its name
     assert out.exists()
 
 

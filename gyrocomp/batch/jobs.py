@@ -210,10 +210,11 @@ def _allan_execute(source: Path, folder: Path, options, files: dict) -> tuple[di
     options = dataclasses.replace(options, config=files.get("config") or options.config, plot=folder / "allan.png")
     series = stage.to_files([source], folder / "allan.json", options)
     figures = {}
-    for key in ("arw", "bias_instability", "rrw"):
-        term = series[0].terms[key]
-        figures[f"{key}_fit"] = term["value"]
-        figures[f"{key}_readoff"] = term.get("readoff")
+    for s in series:
+        prefix = "" if len(series) == 1 else f"{s.column}_"
+        for key in ("arw", "bias_instability", "rrw"):
+            figures[f"{prefix}{key}_fit"] = s.terms[key]["value"]
+            figures[f"{prefix}{key}_readoff"] = s.terms[key].get("readoff")
     return figures, _threshold(stage.check, series, options)
 
 
@@ -233,16 +234,18 @@ def _compensate_execute(source: Path, folder: Path, options, files: dict) -> tup
     from gyrocomp.commands import compensate as stage
     from gyrocomp.pipeline import evaluate
 
-    frame, summary, rec, caught = stage.to_files([source, files["model"]], folder / "compensated.parquet", options)
-    figures = {}
-    for column in ("compensated", "rate"):
-        try:
-            drift_figures = evaluate.residual_drift(frame[column].to_numpy(), rec.fs_hz)
-        except InputError:  # shorter than two blocks: no residual-drift figure
-            drift_figures = {"std_deg_h": None, "p2p_deg_h": None}
-        figures[f"{column}_drift_std_deg_h"] = drift_figures["std_deg_h"]
-        figures[f"{column}_drift_p2p_deg_h"] = drift_figures["p2p_deg_h"]
-    figures["n_warnings"] = len({str(w.message) for w in caught} | set(summary.get("warnings", [])))
+    frame, summaries, rec, caught = stage.to_files([source, files["model"]], folder / "compensated.parquet", options)
+    figures, messages = {}, {str(w.message) for w in caught}
+    for axis, summary in summaries.items():
+        for column in (stage.output_name(axis, "compensated"), axis):
+            try:
+                drift_figures = evaluate.residual_drift(frame[column].to_numpy(), rec.fs_hz)
+            except InputError:  # shorter than two blocks: no residual-drift figure
+                drift_figures = {"std_deg_h": None, "p2p_deg_h": None}
+            figures[f"{column}_drift_std_deg_h"] = drift_figures["std_deg_h"]
+            figures[f"{column}_drift_p2p_deg_h"] = drift_figures["p2p_deg_h"]
+        messages |= set(summary.get("warnings", []))
+    figures["n_warnings"] = len(messages)
     return figures, ""
 
 
@@ -325,14 +328,17 @@ def _diagnose_execute(source: Path, folder: Path, options, files: dict) -> tuple
         markdown=folder / "report.md",
     )
     report = stage.to_files([source], folder / "report.json", options)
-    gap = report["gap"]
-    figures = {
-        "selected_effects": " ".join(report["selected_effects"]),
-        "gap_baseline_fit": gap["baseline"]["fit"],
-        "gap_selected_fit": gap["selected"]["fit"],
-        "gap_baseline_holdout": gap["baseline"]["holdout"],
-        "gap_selected_holdout": gap["selected"]["holdout"],
-    }
+    figures = {}
+    for axis, verdict in report.get("axes", {report.get("axis"): report}).items():
+        prefix = f"{axis}_" if "axes" in report else ""
+        gap = verdict["gap"]
+        figures.update({
+            f"{prefix}selected_effects": " ".join(verdict["selected_effects"]),
+            f"{prefix}gap_baseline_fit": gap["baseline"]["fit"],
+            f"{prefix}gap_selected_fit": gap["selected"]["fit"],
+            f"{prefix}gap_baseline_holdout": gap["baseline"]["holdout"],
+            f"{prefix}gap_selected_holdout": gap["selected"]["holdout"],
+        })
     return figures, ""
 
 

@@ -54,6 +54,9 @@ def allan(
 ) -> None:
     """Allan deviation of each recording, with confidence bands and IEEE noise terms.
 
+    Every axis of --rate-col (gx,gy,gz or a glob) is a series of its own,
+    named by its column; all series share one plot.
+
     Writes allan.json (and the plot) first, then checks the --max-* bounds,
     which compare the classic read-offs (N at 1 s, B = minimum/0.664, K at
     3 s) and exit 3 naming the series and the figure.
@@ -78,7 +81,7 @@ def _table(series):
         for key, term in s.terms.items():
             readoff = term.get("readoff")
             table.add_row(
-                s.name,
+                s.name if s.column == "rate" else f"{s.name} [{s.column}]",
                 key,
                 f"{term['value']:.4g} +- {term['sigma']:.2g}",
                 term["unit"],

@@ -49,7 +49,11 @@ def compensate(
 ) -> None:
     """Remove the learned temperature drift from a recording.
 
-    Writes time, rate, temperature, drift_model and compensated [deg/s].
+    Writes time, rate, temperature, drift_model and compensated [deg/s]; with
+    several axes (--rate-col gx,gy,gz) each axis, temperature,
+    <axis>_drift_model and <axis>_compensated, each axis compensated by the
+    model of its name. A recording with gaps is compensated segment by
+    segment (dT/dt never spans a gap; causal mode, or a direct pipeline).
     Warns (on stderr) when the recording leaves the model's training
     temperature or dT/dt range, and by how much; causal mode clamps both
     to those ranges unless --no-clamp. A foreign, corrupted or newer
@@ -60,13 +64,15 @@ def compensate(
 
         options = from_params(stage.Options, ctx.params)
         with progress(ctx, f"compensate ({mode})", out) as update:
-            frame, summary, _, caught = stage.to_files([recording, model], out, options, progress=update)
+            frame, summaries, _, caught = stage.to_files([recording, model], out, options, progress=update)
         for warning in caught:
             print(f"gyrocomp: warning: {warning.message}", file=sys.stderr)
     console = console_for(ctx, out)
-    console.print(
-        f"{out}: {len(frame)} samples compensated by {summary['kind']} ({mode}); "
-        f"std {frame['rate'].std():.4g} -> {frame['compensated'].std():.4g} deg/s",
-        markup=False,
-        highlight=False,
-    )
+    for axis, summary in summaries.items():
+        after = frame[stage.output_name(axis, "compensated")]
+        console.print(
+            f"{out} [{axis}]: {len(frame)} samples compensated by {summary['kind']} ({mode}); "
+            f"std {frame[axis].std():.4g} -> {after.std():.4g} {summary['unit']}",
+            markup=False,
+            highlight=False,
+        )

@@ -53,7 +53,8 @@ def diagnose(
 ) -> None:
     """Calibrate the baseline simulator (offset + cubic in temperature + white noise) on FIT,
     name the unmodelled effects that explain the rest, and show where the gap lies and how
-    far it shrinks on the held-out run."""
+    far it shrinks on the held-out run. Several axes (--rate-col gx,gy,gz) get a
+    verdict each, against the held-out axis of the same name."""
     with report_errors(ctx):
         from gyrocomp.commands import diagnose as stage, from_params
         from gyrocomp.diagnose.report import summary_table
@@ -61,4 +62,9 @@ def diagnose(
         options = from_params(stage.Options, ctx.params)
         with progress(ctx, "diagnose: fitting candidates", out) as update:
             report = stage.to_files([fit], out, options, progress=update)
-        console_for(ctx, out).print(summary_table(report))
+        console = console_for(ctx, out)
+        for axis, verdict in report.get("axes", {report.get("axis"): report}).items():
+            table = summary_table(verdict)
+            if "axes" in report:
+                table.title = f"[{axis}] {table.title}"
+            console.print(table)

@@ -37,6 +37,7 @@ def train(
     config: Annotated[str, typer.Option("--config", "-c", help="Pipeline TOML or a name in configs/ (pe-lcd-anfis, iceemdan-se-tfpf-nsga2elm, bp, elm, polynomial).")] = "pe-lcd-anfis",
     out: Annotated[Path, typer.Option("--out", "-o", help="model.json to write.")] = ...,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every learner that draws random numbers.")] = 0,
+    workers: Annotated[int, typer.Option("--workers", help="Processes training the axes side by side (direct pipelines); the model does not depend on it.")] = 1,
     overrides: Annotated[Optional[List[str]], typer.Option("--set", help="Override a config value, e.g. --set model.drift.epochs=20 (repeatable).")] = None,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
@@ -55,7 +56,10 @@ def train(
     mixed segment; ICEEMDAN-SE-TFPF + NSGA-II-ELM an NSGA-II-tuned ELM on the
     feature segment. Direct pipelines (bp, elm, polynomial) learn the recorded
     rate itself. dT/dt is the slope of a local straight line over [rate]
-    window_s. model.json holds every setting and learned number compensate needs.
+    window_s. model.json holds every setting and learned number compensate needs,
+    for every axis of --rate-col (gx,gy,gz or a glob: one model per axis, under
+    its column's name). A recording with gaps trains on every sample of every
+    segment; dT/dt never spans a gap.
     """
     with report_errors(ctx):
         from gyrocomp.commands import from_params, train as stage
@@ -63,11 +67,12 @@ def train(
         inputs = [components] if classes is None else [components, classes]
         model = stage.to_files(inputs, out, from_params(stage.Options, ctx.params))
     console = console_for(ctx, out)
-    t = model["training"]
-    fits = ", ".join(f"{seg}: {entry['learner']['kind']} rmse {entry['train_rmse_dps']:.3g} deg/s" for seg, entry in model["segments"].items())
-    console.print(
-        f"{out}: {model['kind']} trained on {t['n_samples']} samples, {t['temperature_c']['min']:.1f} to "
-        f"{t['temperature_c']['max']:.1f} degC; {fits}",
-        markup=False,
-        highlight=False,
-    )
+    for axis, m in model["axes"].items():
+        t = m["training"]
+        fits = ", ".join(f"{seg}: {e['learner']['kind']} rmse {e['train_rmse_dps']:.3g} {m['unit']}" for seg, e in m["segments"].items())
+        console.print(
+            f"{out} [{axis}]: {m['kind']} trained on {t['n_samples']} samples in {t['n_segments']} segment(s), "
+            f"{t['temperature_c']['min']:.1f} to {t['temperature_c']['max']:.1f} degC; {fits}",
+            markup=False,
+            highlight=False,
+        )

@@ -20,7 +20,8 @@ class Options:
     Attributes
     ----------
     column : str
-        Column to analyse, after mapping (``rate``, or e.g. ``compensated``).
+        Column to analyse, after mapping: ``rate`` analyses every axis of
+        ``columns.rate``; any other name (e.g. ``compensated``) that column.
     taus : str or None
         ``octave``, ``decade``, ``all`` or comma-separated seconds; ``None`` takes the config's.
     config : str
@@ -55,11 +56,13 @@ def written(out, options) -> list:
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options()) -> list:
     """Read recordings, analyse one column of each and write ``allan.json`` (and the plot).
 
-    Each recording is read (:func:`gyrocomp.recordings.read_recording`), its column
-    analysed (:func:`gyrocomp.allan.analyse`), and every series written to
-    `out` (``-`` is stdout) as :func:`gyrocomp.allan.allan_artefact`. The
-    bounds are left to :func:`check`, so that the artefacts exist when one
-    is crossed.
+    Each recording is read (:func:`gyrocomp.recordings.read_recording`),
+    each of its axes (or ``options.column``) analysed
+    (:func:`gyrocomp.allan.analyse`) as one series named after the file,
+    its ``column`` the axis' name, and every series written to `out` (``-``
+    is stdout) as :func:`gyrocomp.allan.allan_artefact` and drawn in one
+    plot. The bounds are left to :func:`check`, so that the artefacts exist
+    when one is crossed.
 
     Parameters
     ----------
@@ -80,15 +83,20 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     from gyrocomp.errors import InputError
 
     settings = al.get_config(options.config)
-    spec, column = options.columns, options.column
+    column = options.column
     series, records = [], []
     for path in inputs:
-        rec = recordings.read_recording(path, spec, min_samples=3, resample=options.resample, usecols=[column]).axis()
-        if column not in rec.columns:
+        rec = recordings.read_recording(path, options.columns, min_samples=3, resample=options.resample, usecols=[] if column == "rate" else [column])
+        if column == "rate":
+            values = {axis: rec.axis(axis).rate_dps for axis in rec.axis_names}
+        elif column in rec.columns:
+            values = {column: rec.column(column)}
+        else:
             raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
-        series.append(al.analyse(rec.column(column), rec.fs_hz, taus=options.taus, name=Path(rec.name).name, column=column, settings=settings))
+        for name, x in values.items():
+            series.append(al.analyse(x, rec.fs_hz, taus=options.taus, name=Path(rec.name).name, column=name, settings=settings))
         records.append(rec.input_record())
-        del rec
+        del rec, values
     resolved = {**settings_dict(settings), "taus": options.taus or settings.taus, "column": column}
     artefacts.write_json(out, al.allan_artefact(series, inputs=records, settings=resolved))
     if options.plot is not None:

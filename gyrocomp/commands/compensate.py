@@ -55,44 +55,72 @@ def to_files(
     *,
     progress: Callable[[int, int], None] | None = None,
 ) -> tuple:
-    """Read a recording and a model (``inputs = [recording, model.json]``), compensate, write the artefacts.
+    """Read a recording and a model (``inputs = [recording, model.json]``), compensate every axis, write the artefacts.
 
-    `out` ``-`` writes the table as CSV to stdout, without sidecar.
+    Each axis of the recording is compensated by the model of the same name
+    (a one-axis model applies to a one-axis recording whatever their
+    names), over every sample of every gap-free segment: the temperature
+    rate is estimated within each segment, never across a gap. `out` ``-``
+    writes the table as CSV to stdout, without sidecar.
 
     Returns
     -------
     frame : pandas.DataFrame
-        ``time``, ``rate``, ``temperature``, ``drift_model``, ``compensated``.
-    summary : dict
-        From :func:`~gyrocomp.pipeline.compensate.compensate`.
+        ``time``, each axis, ``temperature``, then ``<axis>_drift_model``
+        and ``<axis>_compensated`` per axis; a single axis named ``rate``
+        gives the columns ``time``, ``rate``, ``temperature``,
+        ``drift_model``, ``compensated``.
+    summaries : dict of str to dict
+        Per axis, from :func:`~gyrocomp.pipeline.compensate.compensate`.
     recording : gyrocomp.recordings.Recording
     caught : list of warnings.WarningMessage
         The warnings compensating raised (e.g. leaving the training temperature range).
     """
     import warnings
 
+    import pandas as pd
+
     from gyrocomp import artefacts, recordings
-    from gyrocomp.pipeline.compensate import compensate, load_model
+    from gyrocomp.pipeline.compensate import compensate, load_models
 
     recording_path, model_path = inputs
-    drift = load_model(artefacts.read_json(model_path, "gyrocomp.model"), str(model_path))
-    recording = recordings.read_recording(recording_path, options.columns, require_temperature=True, min_samples=2, resample=options.resample).axis()
+    models = load_models(artefacts.read_json(model_path), str(model_path))
+    recording = recordings.read_recording(recording_path, options.columns, require_temperature=True, min_samples=2, resample=options.resample, allow_gaps=True)
+    pairs = _pair_axes(recording, models, str(model_path))
+    columns = {"time": recording.time_s, **{name: recording.axis(name).rate_dps for name in pairs}, "temperature": recording.temperature_c}
+    drift, compensated, summaries = {}, {}, {}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        frame, summary = compensate(recording, drift, options.mode, clamp=options.clamp, seed=options.seed, workers=options.workers, callback=progress)
+        for name, model in pairs.items():
+            frame, summary = compensate(
+                recording.axis(name), model, options.mode, clamp=options.clamp, seed=options.seed, workers=options.workers, callback=progress, bounds=list(recording.segments)
+            )
+            drift[name], compensated[name] = frame["drift_model"].to_numpy(), frame["compensated"].to_numpy()
+            summaries[name] = {**summary, "model_axis": _model_axis(models, model), "unit": recording.axis(name).axes[0].unit}
+    for name in pairs:
+        columns[output_name(name, "drift_model")] = drift[name]
+    for name in pairs:
+        columns[output_name(name, "compensated")] = compensated[name]
+    table = pd.DataFrame(columns)
     if str(out) == "-":
-        artefacts.write_table(out, frame, {})
+        artefacts.write_table(out, table, {})
     else:
-        write(Path(out), frame, summary, recording, Path(model_path), options.mode, options.seed)
-    return frame, summary, recording, list(caught)
+        write(Path(out), table, summaries, recording, Path(model_path), options.mode, options.seed)
+    return table, summaries, recording, list(caught)
 
 
-def write(path: Path, frame, summary: dict, recording, model_path: Path, mode: str, seed) -> dict:
+def output_name(axis: str, what: str) -> str:
+    """Column of an axis' ``drift_model`` or ``compensated`` values: ``<axis>_<what>``, or `what` for the axis ``rate``."""
+    return what if axis == "rate" else f"{axis}_{what}"
+
+
+def write(path: Path, frame, summaries: dict, recording, model_path: Path, mode: str, seed) -> dict:
     """Write ``compensated.parquet`` and its ``compensated.json`` sidecar (same stem).
 
-    The sidecar holds the header (inputs: the recording and the model file),
-    the summary of :func:`~gyrocomp.pipeline.compensate.compensate`, and the
-    RMS of the drift model and of the compensated rate.
+    The sidecar holds the header (inputs: the recording and the model
+    file), ``mode``, and per axis (``axes``) the summary of
+    :func:`~gyrocomp.pipeline.compensate.compensate` with the RMS of the
+    drift model and the standard deviations before and after.
     """
     import numpy as np
 
@@ -106,13 +134,35 @@ def write(path: Path, frame, summary: dict, recording, model_path: Path, mode: s
         seed=seed,
     )
     artefacts.write_table(path, frame, header)
-    figures = {
-        "n_samples": int(len(frame)),
-        "fs_hz": float(recording.fs_hz),
-        "drift_model_rms_dps": float(np.sqrt(np.mean(frame["drift_model"].to_numpy() ** 2))),
-        "rate_std_dps": float(np.std(frame["rate"].to_numpy())),
-        "compensated_std_dps": float(np.std(frame["compensated"].to_numpy())),
-    }
-    sidecar = {**header, **summary, "figures": figures}
+    axes = {}
+    for name, summary in summaries.items():
+        drift, out = frame[output_name(name, "drift_model")].to_numpy(), frame[output_name(name, "compensated")].to_numpy()
+        figures = {
+            "n_samples": int(len(frame)),
+            "n_segments": len(recording.segments),
+            "fs_hz": float(recording.fs_hz),
+            "drift_model_rms": float(np.sqrt(np.mean(drift**2))),
+            "rate_std": float(np.std(frame[name].to_numpy())),
+            "compensated_std": float(np.std(out)),
+        }
+        axes[name] = {**summary, "figures": figures}
+    sidecar = {**header, "mode": mode, "axes": axes}
     artefacts.write_json(path.with_suffix(".json"), sidecar)
     return sidecar
+
+
+def _pair_axes(recording, models: dict, name: str) -> dict:
+    """The model of each axis of the recording: same name, or the one model of a one-axis file for a one-axis recording."""
+    from gyrocomp.errors import InputError
+
+    if len(models) == 1 and len(recording.axes) == 1:
+        return {recording.axis_names[0]: next(iter(models.values()))}
+    missing = [axis for axis in recording.axis_names if axis not in models]
+    if missing:
+        have = ", ".join(str(a) for a in models)
+        raise InputError(f"{name}: no model for axis {', '.join(missing)} of {recording.name} (it has {have}); pick the axes with --rate-col")
+    return {axis: models[axis] for axis in recording.axis_names}
+
+
+def _model_axis(models: dict, model):
+    return next(axis for axis, m in models.items() if m is model)

@@ -70,7 +70,7 @@ def written(out, options) -> list:
 
 @guarded(written)
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options(), *, progress: Callable[[int, int], None] | None = None):
-    """Read a recording (``inputs = [recording]``), decompose its rate and write the artefacts (:func:`write`).
+    """Read a recording (``inputs = [recording]``), decompose its one axis and write the artefacts (:func:`write`).
 
     Returns
     -------
@@ -94,12 +94,14 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
     Parameters
     ----------
     recording : gyrocomp.recordings.Recording
+        One axis (:meth:`~gyrocomp.recordings.Recording.axis`).
     settings : gyrocomp.decompose.DecomposeSettings
     out : path-like
         ``components.parquet`` to write: ``time``, ``rate``,
         ``temperature`` (when the recording has it) and one column per
         component, fastest first; header schema ``gyrocomp.components``
-        with ``components`` (the names) and ``fs_hz``. The sidecar
+        with ``components`` (the names), ``fs_hz``, and ``axis`` and
+        ``unit`` (the axis' column name and unit, kept by ``train``). The sidecar
         (schema :data:`~gyrocomp.decompose.SIDECAR_SCHEMA`,
         :func:`~gyrocomp.decompose.component_stats`) goes beside it with
         suffix ``.json``.
@@ -126,7 +128,7 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
     resolved = settings_dict(settings)
     records = [recording.input_record()]
     header = artefacts.artefact_header("gyrocomp.components", inputs=records, settings=resolved, seed=seed)
-    header.update(components=list(result.names), fs_hz=recording.fs_hz)
+    header.update(components=list(result.names), fs_hz=recording.fs_hz, axis=recording.axes[0].name, unit=recording.axes[0].unit)
     sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=records, settings=resolved, seed=seed)
     sidecar.update(method=settings.method, fs_hz=recording.fs_hz, **component_stats(result, recording.fs_hz))
     artefacts.write_table(out, frame, header)

@@ -56,12 +56,19 @@ def to_files(
     *,
     progress: Callable[[int, int], None] | None = None,
 ) -> dict:
-    """Read the recordings (``inputs = [fit]``), diagnose them and write ``report.json`` (``-``: stdout), ``report.md`` and the plot.
+    """Read the recordings (``inputs = [fit]``), diagnose each axis and write ``report.json`` (``-``: stdout), ``report.md`` and the plot.
+
+    Each axis is diagnosed alone, against the axis of the same name in the
+    held-out recording. One axis gives the report of
+    :func:`gyrocomp.diagnose.report.to_json` (with ``axis``, its name);
+    several give the header and ``axes``, a verdict per axis name, one
+    ``report.md`` with a section per axis and one plot per axis
+    (``gap_<axis>.png`` beside the ``--plot`` path).
 
     Returns
     -------
     dict
-        The report as written (:func:`gyrocomp.diagnose.report.to_json`).
+        The report as written.
     """
     from gyrocomp import artefacts, recordings
     from gyrocomp.commands import PLOT_LOCK
@@ -78,14 +85,25 @@ def to_files(
         from gyrocomp.sim.model import load_sim_config
 
         start = tuple(load_sim_config(options.sim).gyro.active_effects())
-    body = diagnose(fit_rec, hold_rec, settings, start_effects=start, callback=progress)
+    bodies = {}
+    for axis in fit_rec.axis_names:
+        held = None if hold_rec is None else hold_rec.axis(axis if len(fit_rec.axes) > 1 else None)
+        bodies[axis] = diagnose(fit_rec.axis(axis), held, settings, start_effects=start, callback=progress)
     records = [fit_rec.input_record()] + ([hold_rec.input_record()] if hold_rec else [])
-    report = to_json(body, inputs=records, settings=settings_dict(settings))
+    report = to_json({}, inputs=records, settings=settings_dict(settings))
+    verdicts = {axis: {**report, **to_json(body, inputs=records, settings=report["settings"]), "axis": axis} for axis, body in bodies.items()}
+    if len(verdicts) == 1:
+        report = next(iter(verdicts.values()))
+    else:
+        report["axes"] = {axis: {k: v for k, v in verdict.items() if k not in report} for axis, verdict in verdicts.items()}
     artefacts.write_json(out, report)
     if options.markdown is not None:
+        text = "\n".join((f"# Axis `{axis}`\n\n" if len(verdicts) > 1 else "") + to_markdown(v) for axis, v in verdicts.items())
         with artefacts.atomic_path(options.markdown) as tmp:
-            Path(tmp).write_text(to_markdown(report), encoding="utf-8")
+            Path(tmp).write_text(text, encoding="utf-8")
     if options.plot is not None:
+        plot = Path(options.plot)
         with PLOT_LOCK:
-            plot_gap(report, options.plot)
+            for axis, verdict in verdicts.items():
+                plot_gap(verdict, plot if len(verdicts) == 1 else plot.with_name(f"{plot.stem}_{axis}{plot.suffix}"))
     return report

@@ -60,7 +60,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     from gyrocomp.pipeline.compensate import load_model
 
     (model_path,) = inputs
-    drift = load_model(artefacts.read_json(model_path, "gyrocomp.model"), str(model_path))
+    drift = load_model(artefacts.read_json(model_path), str(model_path))  # load_model checks the header (model.json 1.x and 2.x)
     recording = None
     if options.vectors is not None:
         recording = recordings.read_recording(options.vectors, options.columns, require_temperature=True, min_samples=2).axis()

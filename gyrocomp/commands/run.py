@@ -34,7 +34,7 @@ from gyrocomp.pipeline import evaluate
 from gyrocomp.pipeline.compensate import compensate, load_model
 from gyrocomp.pipeline.settings import EvaluateSettings, RunSettings, SignalSettings, pipeline_settings
 from gyrocomp.artefacts import file_record
-from gyrocomp.pipeline.train import train_direct, train_parallel
+from gyrocomp.pipeline.train import model_file, train_direct, train_parallel
 
 __all__ = ["REPORT_SCHEMA", "Options", "to_files", "load_run_config", "decompose_and_classify"]
 
@@ -143,7 +143,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
                 info["stage_times_s"][f"compensate_{mode}_{label}"] = time.perf_counter() - t0
                 summary["warnings"] = sorted({str(w.message) for w in caught} | set(summary["warnings"]))
                 path = folder / f"compensated_{mode}_{label}.parquet"
-                write_compensation(path, frame, summary, rec, folder / "model.json", mode, seed)
+                write_compensation(path, frame, {"rate": summary}, rec, folder / "model.json", mode, seed)
                 info["artefacts"][f"compensated_{mode}_{label}"] = str(path.relative_to(out))
                 outputs[label] = frame["compensated"].to_numpy()
                 if label == "test":
@@ -242,9 +242,9 @@ def _train_method(config, source, name, train_rec, folder: Path, seed, workers, 
         model = train_direct(train_rec, config, source=source, seed=seed)
         info["stage_times_s"]["train"] = time.perf_counter() - t0
     info["train_time_s"] = time.perf_counter() - t_train
-    artefacts.write_json(model_path, model)
+    artefacts.write_json(model_path, model_file({"rate": model}))
     info["artefacts"]["model"] = str(Path(name) / "model.json")
-    return info, load_model(artefacts.read_json(model_path, "gyrocomp.model"), str(model_path))
+    return info, load_model(artefacts.read_json(model_path), str(model_path))
 
 
 def _method_config(method: str, overrides) -> tuple[dict, str, str]:

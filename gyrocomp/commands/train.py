@@ -25,13 +25,18 @@ class Options:
         Seed of every learner that draws random numbers.
     overrides : tuple of str
         ``table.key=value`` assignments to the config (``--set``).
+    workers : int
+        Processes training the axes of a direct pipeline side by side; the
+        model does not depend on it.
     columns : gyrocomp.recordings.ColumnSpec
-        Column names and units of a direct pipeline's recording.
+        Column names and units of a direct pipeline's recording; several
+        axes (``rate="gx,gy,gz"``) give one model each.
     """
 
     config: str = "pe-lcd-anfis"
     seed: int = 0
     overrides: tuple = ()
+    workers: int = 1
     columns: ColumnSpec = ColumnSpec()
 
 
@@ -44,13 +49,20 @@ def written(out, options) -> list:
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options()) -> dict:
     """Fit the drift models of a pipeline and write ``model.json``.
 
+    A direct pipeline fits one model per sensor axis of the recording
+    (every sample of every gap-free segment; the temperature rate never
+    spans a gap), each with the same seed, in ``options.workers``
+    processes. A parallel pipeline fits the one axis its components were
+    decomposed from.
+
     Parameters
     ----------
     inputs : sequence of path-like
         ``[components.parquet, classes.json]`` for a parallel pipeline,
         ``[recording]`` (with temperature) for a direct one.
     out : path-like
-        ``model.json`` to write.
+        ``model.json`` to write (:func:`gyrocomp.pipeline.train.model_file`:
+        a model per axis under ``axes``, named after the axes' columns).
     options : Options
 
     Returns
@@ -63,7 +75,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     from gyrocomp.errors import InputError
     from gyrocomp.pipeline.settings import pipeline_settings
     from gyrocomp.artefacts import file_record
-    from gyrocomp.pipeline.train import train_direct, train_parallel
+    from gyrocomp.pipeline.train import model_file, train_parallel
 
     cfg = check_tables(apply_overrides(load_config(options.config), options.overrides), PIPELINE_TABLES, options.config)
     pipeline = pipeline_settings(cfg, options.config)
@@ -75,11 +87,41 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         frame, header = artefacts.read_table(source, "gyrocomp.components")
         labels = artefacts.read_json(classes, "gyrocomp.classes")
         records = [file_record(source), file_record(classes)]
-        model = train_parallel(frame, header, labels, cfg, source=options.config, seed=options.seed, inputs=records)
+        axis = str(header.get("axis", "rate"))
+        trained = {axis: train_parallel(frame, header, labels, cfg, source=options.config, seed=options.seed, inputs=records)}
+        units = {axis: str(header.get("unit", "deg/s"))}
     else:
         if rest:
             raise InputError(f"{options.config}: a direct pipeline ({pipeline.kind}) trains on the recording alone; drop {rest[0]}")
-        recording = recordings.read_recording(source, options.columns, require_temperature=True, min_samples=16).axis()
-        model = train_direct(recording, cfg, source=options.config, seed=options.seed)
+        recording = recordings.read_recording(source, options.columns, require_temperature=True, min_samples=16, allow_gaps=True)
+        trained = train_axes(recording, cfg, source=options.config, seed=options.seed, workers=options.workers)
+        units = {axis.name: axis.unit for axis in recording.axes}
+    model = model_file(trained, units)
     artefacts.write_json(out, model)
     return model
+
+
+def train_axes(recording, config: dict, *, source: str, seed: int | None, workers: int = 1) -> dict:
+    """A direct pipeline's model of every axis of a recording, by axis name in the recording's order.
+
+    Each axis is trained alone (:func:`gyrocomp.pipeline.train.train_direct`
+    on :meth:`~gyrocomp.recordings.Recording.axis`, over its gap-free
+    segments) with the same seed, so the models do not depend on `workers`.
+    """
+    from gyrocomp.batch.backends import run_local
+
+    tasks = [
+        {"axis": name, "recording": recording.axis(name), "config": config, "source": source, "seed": seed, "bounds": list(recording.segments)}
+        for name in recording.axis_names
+    ]
+    done = {task["axis"]: result for task, result in run_local(_train_axis, tasks, workers=workers)}
+    for name in recording.axis_names:
+        if isinstance(done[name], BaseException):
+            raise done[name]
+    return {name: done[name] for name in recording.axis_names}
+
+
+def _train_axis(task: dict) -> dict:
+    from gyrocomp.pipeline.train import train_direct
+
+    return train_direct(task["recording"], task["config"], source=task["source"], seed=task["seed"], bounds=task["bounds"])

@@ -30,13 +30,12 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from gyrocomp import artefacts, recordings
+from gyrocomp import recordings
 from gyrocomp.config import bind
 from gyrocomp.errors import InputError
-from gyrocomp.pipeline import rate as rate_estimator
 from gyrocomp.models._base import check_choice, check_float, finite_array
 from gyrocomp.pipeline.settings import PIPELINE_KINDS, RateSettings
-from gyrocomp.pipeline.train import INPUTS, MODEL_SCHEMA, segments
+from gyrocomp.pipeline.train import INPUTS, axis_models, segment_inputs, segments
 
 __all__ = [
     "COMPENSATION_SCHEMA",
@@ -45,6 +44,7 @@ __all__ = [
     "DriftModel",
     "load_model",
     "clamp_inputs",
+    "load_models",
     "compensate",
 ]
 
@@ -82,9 +82,9 @@ class DriftModel:
         r = self.obj["training"]["temperature_rate_c_per_s"]
         return float(r["min"]), float(r["max"])
 
-    def inputs(self, temperature_c, fs_hz: float, *, causal: bool) -> np.ndarray:
-        """[temperature, temperature rate] with the model's estimator (centred or causal)."""
-        return rate_estimator.model_inputs(temperature_c, fs_hz, self.rate, causal=causal)
+    def inputs(self, temperature_c, fs_hz: float, *, causal: bool, bounds=None) -> np.ndarray:
+        """[temperature, temperature rate] with the model's estimator (centred or causal), within each gap-free range of `bounds`."""
+        return segment_inputs(temperature_c, fs_hz, self.rate, bounds, causal=causal)
 
     def predict(self, X: np.ndarray, *, clamp: bool | None = None) -> dict:
         """Predicted drift of each modelled segment [deg/s] for inputs `X` (n_samples, 2).
@@ -105,19 +105,43 @@ class DriftModel:
 
 
 def load_model(obj: dict, name: str = "model.json") -> DriftModel:
-    """Check a ``model.json`` object and rebuild its learners.
+    """Check a one-axis ``model.json`` object (or the model of one axis) and rebuild its learners.
 
     Raises
     ------
     SchemaError
         Not a ``gyrocomp.model`` or of a newer major version.
     InputError
-        A missing or malformed entry (named), or a learner that does not
-        rebuild.
+        Several axes (:func:`load_models` reads them), a missing or
+        malformed entry (named), or a learner that does not rebuild.
     """
+    (axis, one), *more = axis_models(obj, name).items()
+    if more:
+        names = ", ".join([axis, *(a for a, _ in more)])
+        raise InputError(f"{name}: holds a model per axis ({names}); load them with load_models")
+    return _drift_model(one, name if axis is None else f"{name} axis {axis}")
+
+
+def load_models(obj: dict, name: str = "model.json") -> dict:
+    """The model of every axis of a ``model.json`` object (either version).
+
+    Returns
+    -------
+    dict of str to DriftModel
+        By axis name, in the file's order; a version-1 file (one model, no
+        axes) gives one entry whose key is ``None``.
+
+    Raises
+    ------
+    SchemaError, InputError
+        As :func:`load_model`.
+    """
+    return {axis: _drift_model(one, name if axis is None else f"{name} axis {axis}") for axis, one in axis_models(obj, name).items()}
+
+
+def _drift_model(obj: dict, name: str) -> DriftModel:
     from gyrocomp import models
 
-    artefacts.check_header(obj, MODEL_SCHEMA, name)
     try:
         rate_table = {k: obj["rate_estimator"][k] for k in ("method", "window_s", "polyorder")}
         rate = bind(RateSettings, rate_table, f"{name} rate_estimator")
@@ -193,13 +217,14 @@ def compensate(
     seed: int | None = None,
     workers: int = 1,
     callback=None,
+    bounds=None,
 ) -> tuple[pd.DataFrame, dict]:
     """Compensate a recording with a trained model.
 
     Parameters
     ----------
     recording : gyrocomp.recordings.Recording
-        With ``temperature``.
+        One axis in ``rate``, with ``temperature``.
     model : DriftModel
         From :func:`load_model`.
     mode : {"full", "causal"}
@@ -215,6 +240,10 @@ def compensate(
         Processes for the decomposition.
     callback : callable(done, total) or None
         Progress of the decomposition.
+    bounds : sequence of slice or None
+        Row ranges sampled without a gap (``None``: one). The temperature
+        rate is estimated within each, never across a gap; ``full`` mode of
+        a parallel pipeline decomposes one continuous run and refuses several.
 
     Returns
     -------
@@ -229,9 +258,14 @@ def compensate(
     data = recording.data
     if "temperature" not in data.columns:
         raise InputError(f"{recording.name}: no `temperature` column; the drift model needs it")
+    if mode == "full" and model.parallel and bounds is not None and len(bounds) > 1:
+        raise InputError(
+            f"{recording.name}: {len(bounds)} segments (gaps in time); full mode decomposes one continuous run: "
+            "use --mode causal, or --resample to fill the gaps"
+        )
     temperature = data["temperature"].to_numpy(dtype=float)
     rate = data["rate"].to_numpy(dtype=float)
-    X = model.inputs(temperature, recording.fs_hz, causal=(mode == "causal"))
+    X = model.inputs(temperature, recording.fs_hz, causal=(mode == "causal"), bounds=bounds)
     if clamp is None:
         clamp = True if mode == "causal" else model.clip_inputs
     predicted = model.predict(X, clamp=clamp)

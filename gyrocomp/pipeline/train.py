@@ -42,31 +42,39 @@ from gyrocomp.pipeline.settings import (
     rate_settings,
 )
 
-__all__ = ["MODEL_SCHEMA", "INPUTS", "train_direct", "train_parallel", "segments"]
+__all__ = ["MODEL_SCHEMA", "MODEL_VERSION", "INPUTS", "train_direct", "train_parallel", "segments", "model_file", "axis_models"]
 
 MODEL_SCHEMA = "gyrocomp.model"
+MODEL_VERSION = "2.0"
+"""``model.json`` version: 2 holds one model per sensor axis under ``axes``; 1 (one model, no axes) is still read."""
+_HEADER_KEYS = ("schema", "gyrocomp_version", "inputs", "settings", "seed")
 INPUTS = ("temperature_c", "temperature_rate_c_per_s")
 """Names of the learners' input columns, in order."""
 
 
-def train_direct(recording: recordings.Recording, config: dict, *, source: str = "config", seed: int | None = 0) -> dict:
+def train_direct(recording: recordings.Recording, config: dict, *, source: str = "config", seed: int | None = 0, bounds=None) -> dict:
     """Fit a direct pipeline's learner on a recording's rate.
 
     Parameters
     ----------
     recording : gyrocomp.recordings.Recording
-        With ``temperature``.
+        One axis in ``rate``, with ``temperature``.
     config : dict
         A loaded pipeline config with ``[pipeline] parallel = false``.
     source : str
         The config's name, used in messages and recorded in the header.
     seed : int or None
         Seed of every learner that takes one.
+    bounds : sequence of slice or None
+        Row ranges sampled without a gap (``None``: one). Every sample of
+        every range is used; the temperature rate is estimated within each
+        range, never across a gap.
 
     Returns
     -------
     dict
-        The ``model.json`` object (schema ``gyrocomp.model``).
+        The model of one axis (schema ``gyrocomp.model``, no ``axes``;
+        :func:`model_file` gathers the axes of a ``model.json``).
     """
     pipeline = pipeline_settings(config, source)
     if pipeline.parallel:
@@ -84,6 +92,7 @@ def train_direct(recording: recordings.Recording, config: dict, *, source: str =
         settings=settings,
         inputs=[recording.input_record()],
         extra={"segments": {"drift": {"components": ["rate"]}}},
+        bounds=bounds,
     )
 
 
@@ -196,11 +205,72 @@ def segments(stack: np.ndarray, labels, denoise_settings) -> dict:
     return out
 
 
-def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, inputs, extra) -> dict:
+def segment_inputs(temperature, fs_hz: float, settings, bounds=None, *, causal: bool = False) -> np.ndarray:
+    """The learners' inputs (:func:`gyrocomp.pipeline.rate.model_inputs`) of each gap-free row range, stacked.
+
+    The temperature rate restarts in each range (its window shrinks to fit
+    a short one), so no estimate spans a gap. `bounds` ``None`` is one range.
+    """
+    temperature = np.asarray(temperature, dtype=float)
+    if bounds is None or len(bounds) == 1:
+        return rate_estimator.model_inputs(temperature, fs_hz, settings, causal=causal)
+    return np.concatenate([rate_estimator.model_inputs(temperature[b], fs_hz, settings, causal=causal) for b in bounds])
+
+
+def model_file(axes: dict, units: dict | None = None) -> dict:
+    """The ``model.json`` object (version :data:`MODEL_VERSION`) of one model per sensor axis.
+
+    Parameters
+    ----------
+    axes : dict of str to dict
+        Axis name (the recording's column) to its model from
+        :func:`train_direct` or :func:`train_parallel`, in output order.
+        They share one header (inputs, settings, seed): the first's.
+    units : dict of str to str, optional
+        Unit of each axis' values and drift model (``deg/s``, ``m/s^2``).
+
+    Returns
+    -------
+    dict
+        The header and ``axes``: per axis its model without the header, and ``unit``.
+    """
+    first = next(iter(axes.values()))
+    header = {key: first[key] for key in _HEADER_KEYS if key in first}
+    header["schema"] = {"name": MODEL_SCHEMA, "version": MODEL_VERSION}
+    body = {}
+    for name, model in axes.items():
+        body[name] = {key: value for key, value in model.items() if key not in _HEADER_KEYS}
+        body[name]["unit"] = (units or {}).get(name, "deg/s")
+    return {**header, "axes": body}
+
+
+def axis_models(obj: dict, name: str = "model.json") -> dict:
+    """Each axis' model of a ``model.json`` as a one-axis object with the header (:func:`train_direct`'s shape).
+
+    A version-1 file (one model, no ``axes``) gives ``{None: obj}``: one axis, unnamed.
+
+    Raises
+    ------
+    SchemaError
+        Not a ``gyrocomp.model``, or of a newer major version.
+    InputError
+        Version 2 without ``axes``.
+    """
+    artefacts.check_header(obj, MODEL_SCHEMA, name, supported_major=int(MODEL_VERSION.split(".")[0]))
+    if int(str(obj["schema"]["version"]).split(".")[0]) < 2:
+        return {None: obj}
+    axes = obj.get("axes")
+    if not isinstance(axes, dict) or not axes or not all(isinstance(v, dict) for v in axes.values()):
+        raise InputError(f"{name}: no `axes` (one model per sensor axis)")
+    header = {key: obj[key] for key in _HEADER_KEYS if key in obj}
+    return {axis: {**header, **entry} for axis, entry in axes.items()}
+
+
+def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, inputs, extra, bounds=None) -> dict:
     rate_cfg = rate_settings(config, source)
     pipeline = pipeline_settings(config, source)
     model_table = model_settings(config, source, parallel=pipeline.parallel)
-    X = rate_estimator.model_inputs(temperature, fs_hz, rate_cfg)
+    X = segment_inputs(temperature, fs_hz, rate_cfg, bounds)
     lo, hi = X.min(axis=0), X.max(axis=0)
     _check_rank(lo, hi, model_table, ", ".join(record["name"] for record in inputs) or source)
     fitted = {}
@@ -248,6 +318,7 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
             "temperature_rate_c_per_s": {"min": float(lo[1]), "max": float(hi[1])},
             "n_samples": int(X.shape[0]),
             "duration_s": float(X.shape[0] / fs_hz),
+            "n_segments": 1 if bounds is None else len(bounds),
         },
     }
     if extra.get("training_classes") is not None:

@@ -43,8 +43,8 @@ def test_cli_chain_round_trips_and_compensates_a_held_out_run(tmp_path, oven_fil
     """Every artefact feeds the next stage; held-out drift falls >= 10x causal, >= 5x full."""
     train_path, test_path = oven_files
     model = _chain(tmp_path, train_path, config, extra)
-    obj = artefacts.read_json(model, "gyrocomp.model")
-    assert obj["parallel"] and obj["kind"] == config
+    obj = artefacts.read_json(model)
+    assert list(obj["axes"]) == ["rate"] and obj["axes"]["rate"]["parallel"] and obj["axes"]["rate"]["kind"] == config
     assert obj["inputs"][0]["name"] == "components.parquet" and obj["settings"]["classify"]
     test = recordings.read_recording(test_path)
     raw = evaluate.residual_drift(test.rate_dps, test.fs_hz)["std_deg_h"]
@@ -54,7 +54,7 @@ def test_cli_chain_round_trips_and_compensates_a_held_out_run(tmp_path, oven_fil
         frame, header = artefacts.read_table(out, "gyrocomp.compensation")
         assert list(frame.columns) == ["time", "rate", "temperature", "drift_model", "compensated"]
         sidecar = artefacts.read_json(out.with_suffix(".json"), "gyrocomp.compensation")
-        assert sidecar["mode"] == mode and (mode == "causal" or sidecar["classes"])
+        assert sidecar["mode"] == mode and (mode == "causal" or sidecar["axes"]["rate"]["classes"])
         left = evaluate.residual_drift(frame["compensated"], test.fs_hz)["std_deg_h"]
         assert raw / left >= factor, f"{config} {mode}: {raw:.1f} -> {left:.2f} deg/h"
 
@@ -86,11 +86,13 @@ def test_bad_model_files_exit_2(tmp_path, oven_files):
     good = tmp_path / "poly.json"
     _invoke(["train", oven_files[0], "--config", "polynomial", "--out", good])
     obj = json.loads(good.read_text())
+    axis = obj["axes"]["rate"]
     cases = {
-        "future.json": {**obj, "schema": {"name": "gyrocomp.model", "version": "2.0"}},
+        "future.json": {**obj, "schema": {"name": "gyrocomp.model", "version": "3.0"}},
         "foreign.json": {**obj, "schema": {"name": "gyrocomp.classes", "version": "1.0"}},
-        "unfitted.json": {**obj, "segments": {"drift": {**obj["segments"]["drift"], "learner": {**obj["segments"]["drift"]["learner"], "fitted": None}}}},
-        "nosegment.json": {k: v for k, v in obj.items() if k != "segments"},
+        "unfitted.json": {**obj, "axes": {"rate": {**axis, "segments": {"drift": {**axis["segments"]["drift"], "learner": {**axis["segments"]["drift"]["learner"], "fitted": None}}}}}},
+        "nosegment.json": {**obj, "axes": {"rate": {k: v for k, v in axis.items() if k != "segments"}}},
+        "noaxes.json": {k: v for k, v in obj.items() if k != "axes"},
     }
     for name, content in cases.items():
         (tmp_path / name).write_text(json.dumps(content))

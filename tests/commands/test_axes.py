@@ -1,0 +1,217 @@
+"""Several sensor axes in one go: one model per axis, ``<axis>_compensated``, one Allan plot; gaps as segments.
+
+Every multi-axis result is checked against the same command run on one
+column alone (to 1e-12) and against the drift the test itself put in.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from numpy.testing import assert_allclose
+from typer.testing import CliRunner
+
+from gyrocomp.cli import app
+
+AXES = ("gx", "gy", "gz")
+NOISE_DPS = 0.01
+"""White rate noise of every axis [deg/s]: ARW = 0.01 * 60 = 0.6 deg/sqrt(h) at any sample rate."""
+
+
+def _drift(temperature: np.ndarray) -> dict[str, np.ndarray]:
+    """A different cubic in temperature per axis [deg/s] (the polynomial pipeline's own form)."""
+    d = temperature - 25.0
+    return {"gx": 0.01 * d + 1e-3 * d**2, "gy": -0.02 * d + 0.3, "gz": 5e-5 * d**3 - 0.1}
+
+
+@pytest.fixture(scope="module")
+def log3(tmp_path_factory) -> tuple[Path, dict]:
+    """A 2 h, 1 Hz `time,gx,gy,gz,temp` log over a 5..45 degC cycle; returns its path and the noise put in."""
+    rng = np.random.default_rng(17)
+    t = np.arange(7200.0)
+    temperature = 25.0 + 20.0 * np.sin(2 * np.pi * t / 7200.0)
+    noise = {axis: NOISE_DPS * rng.standard_normal(t.size) for axis in AXES}
+    drift = _drift(temperature)
+    frame = pd.DataFrame({"time": t, **{axis: drift[axis] + noise[axis] for axis in AXES}, "temp": temperature})
+    path = tmp_path_factory.mktemp("axes") / "log3.csv"
+    frame.to_csv(path, index=False)
+    return path, noise
+
+
+def _invoke(*args) -> None:
+    result = CliRunner().invoke(app, ["-q", *[str(a) for a in args]])
+    assert result.exit_code == 0, result.output
+
+
+def _train(path, out, rate_col, *extra) -> dict:
+    _invoke("train", path, "--config", "polynomial", "--rate-col", rate_col, "--temp-col", "temp", *extra, "--out", out)
+    return json.loads(Path(out).read_text())
+
+
+def test_one_train_writes_one_model_per_axis_equal_to_single_axis_runs(log3, tmp_path):
+    path, _ = log3
+    model = _train(path, tmp_path / "model.json", "gx,gy,gz")
+    assert model["schema"] == {"name": "gyrocomp.model", "version": "2.0"}
+    assert list(model["axes"]) == list(AXES)
+    for axis in AXES:
+        alone = _train(path, tmp_path / f"{axis}.json", axis)
+        assert list(alone["axes"]) == [axis]
+        assert model["axes"][axis] == alone["axes"][axis]
+    # each axis learned its own drift: the cubic's value at 40 degC, an independent check of the fit
+    from gyrocomp.pipeline.compensate import load_models
+
+    models = load_models(model)
+    for axis in AXES:
+        X = np.array([[40.0, 0.0]])
+        assert_allclose(models[axis].predict(X)["drift"][0], _drift(np.array([40.0]))[axis][0], atol=2e-3)
+
+
+def test_train_workers_give_the_same_bytes(log3, tmp_path):
+    path, _ = log3
+    _train(path, tmp_path / "w1.json", "g?", "--workers", "1")
+    _train(path, tmp_path / "w3.json", "g?", "--workers", "3")
+    assert (tmp_path / "w1.json").read_bytes() == (tmp_path / "w3.json").read_bytes()
+
+
+def test_one_compensate_writes_every_axis_as_the_single_axis_runs_do(log3, tmp_path):
+    path, noise = log3
+    _train(path, tmp_path / "model.json", "gx,gy,gz")
+    out = tmp_path / "comp.parquet"
+    _invoke("compensate", path, tmp_path / "model.json", "--rate-col", "gx,gy,gz", "--temp-col", "temp", "--out", out)
+    frame = pd.read_parquet(out)
+    assert [f"{axis}_compensated" for axis in AXES] == [c for c in frame.columns if c.endswith("_compensated")]
+    sidecar = json.loads(out.with_suffix(".json").read_text())
+    assert list(sidecar["axes"]) == list(AXES)
+    for axis in AXES:
+        _train(path, tmp_path / f"{axis}.json", axis)
+        single = tmp_path / f"{axis}.parquet"
+        _invoke("compensate", path, tmp_path / f"{axis}.json", "--rate-col", axis, "--temp-col", "temp", "--out", single)
+        assert_allclose(frame[f"{axis}_compensated"], pd.read_parquet(single)[f"{axis}_compensated"], rtol=0, atol=1e-12)
+        # what is left is the noise the test put in (plus a constant): the drift is gone
+        left = frame[f"{axis}_compensated"].to_numpy() - noise[axis]
+        assert np.std(left) < 0.1 * NOISE_DPS, axis
+
+
+def test_a_version_1_model_still_compensates(log3, tmp_path):
+    """A model.json from before axes (schema 1.0, one model at the top level) reads as one unnamed axis."""
+    path, _ = log3
+    model = _train(path, tmp_path / "model.json", "gy")
+    header = {k: model[k] for k in ("gyrocomp_version", "inputs", "settings", "seed")}
+    entry = {k: v for k, v in model["axes"]["gy"].items() if k != "unit"}
+    old = {"schema": {"name": "gyrocomp.model", "version": "1.0"}, **header, **entry}
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    for name in ("model", "old"):
+        _invoke("compensate", path, tmp_path / f"{name}.json", "--rate-col", "gy", "--temp-col", "temp", "--out", tmp_path / f"{name}.parquet")
+    assert_allclose(pd.read_parquet(tmp_path / "old.parquet")["gy_compensated"], pd.read_parquet(tmp_path / "model.parquet")["gy_compensated"], atol=0)
+
+
+def test_compensate_names_an_axis_the_model_lacks(log3, tmp_path):
+    path, _ = log3
+    _train(path, tmp_path / "model.json", "gx,gy")
+    result = CliRunner().invoke(app, ["compensate", str(path), str(tmp_path / "model.json"), "--rate-col", "gx,gz", "--temp-col", "temp", "--out", str(tmp_path / "c.parquet")])
+    assert result.exit_code == 2 and "gz" in result.output and "gx, gy" in result.output
+    assert not (tmp_path / "c.parquet").exists()
+
+
+def test_allan_draws_every_axis_in_one_plot(log3, tmp_path, monkeypatch):
+    import gyrocomp.allan
+
+    path, _ = log3
+    drawn = []
+    real = gyrocomp.allan.plot_allan
+    monkeypatch.setattr(gyrocomp.allan, "plot_allan", lambda series, out, **kw: (drawn.append([s.column for s in series]), real(series, out, **kw)))
+    _invoke("allan", path, "--rate-col", "g*", "--temp-col", "temp", "--taus", "1,2,4,8", "--out", tmp_path / "allan.json", "--plot", tmp_path / "allan.png")
+    assert drawn == [list(AXES)] and (tmp_path / "allan.png").stat().st_size > 0
+    series = json.loads((tmp_path / "allan.json").read_text())["series"]
+    assert [s["column"] for s in series] == list(AXES)
+    for axis, s in zip(AXES, series):
+        _invoke("allan", path, "--rate-col", axis, "--temp-col", "temp", "--taus", "1,2,4,8", "--out", tmp_path / f"{axis}.json")
+        alone = json.loads((tmp_path / f"{axis}.json").read_text())["series"][0]
+        assert_allclose(s["adev"], alone["adev"], rtol=0, atol=1e-12)
+        # white noise of 0.01 deg/s: ADEV(1 s) = 0.01 deg/s (NIST SP 1065, white FM), within its chi-square spread
+        assert_allclose(s["adev"][0], NOISE_DPS, rtol=0.05)
+
+
+def test_accelerometer_axes_keep_their_unit(tmp_path):
+    """An accelerometer axis in g trains and compensates in m/s^2, and says so."""
+    rng = np.random.default_rng(3)
+    t = np.arange(3600.0)
+    temperature = 20.0 + 10.0 * t / 3600.0
+    ax_g = 1e-3 * (temperature - 20.0) + 1e-4 * rng.standard_normal(t.size)
+    path = tmp_path / "acc.csv"
+    pd.DataFrame({"time": t, "ax": ax_g, "temperature": temperature}).to_csv(path, index=False)
+    model = _train(path, tmp_path / "m.json", "ax", "--rate-unit", "g", "--temp-col", "temperature")
+    assert model["axes"]["ax"]["unit"] == "m/s^2"
+    out = tmp_path / "c.parquet"
+    _invoke("compensate", path, tmp_path / "m.json", "--rate-col", "ax", "--rate-unit", "g", "--out", out)
+    frame = pd.read_parquet(out)
+    assert_allclose(frame["ax"], ax_g * 9.80665, rtol=1e-12)  # standard gravity, CGPM 1901
+    assert json.loads(out.with_suffix(".json").read_text())["axes"]["ax"]["unit"] == "m/s^2"
+    assert np.std(frame["ax_compensated"]) < 2e-3 * np.std(frame["ax"]) + 2e-3
+
+
+def test_gaps_are_segments_never_bridged(tmp_path):
+    """A gapped log compensates exactly as its segments do one by one: nothing crosses a gap, nothing is filled."""
+    rng = np.random.default_rng(5)
+    parts, start = [], 0.0
+    for n, gap in ((900, 300.0), (600, 1200.0), (1200, 0.0)):
+        t = start + np.arange(n)
+        parts.append(pd.DataFrame({"time": t, "rate": 0.02 * np.sin(t / 900.0), "temperature": 25 + 10 * np.sin(t / 900.0)}))
+        start = t[-1] + 1 + gap
+    whole = pd.concat(parts, ignore_index=True)
+    whole["rate"] += NOISE_DPS * rng.standard_normal(len(whole))
+    path = tmp_path / "gapped.csv"
+    whole.to_csv(path, index=False)
+    model = _train(path, tmp_path / "m.json", "rate", "--temp-col", "temperature")
+    assert model["axes"]["rate"]["training"]["n_segments"] == 3
+    assert model["axes"]["rate"]["training"]["n_samples"] == len(whole)
+    out = tmp_path / "c.parquet"
+    _invoke("compensate", path, tmp_path / "m.json", "--out", out)
+    frame = pd.read_parquet(out)
+    assert_allclose(frame["time"], whole["time"], atol=0)  # no filled row
+    row = 0
+    for k, _ in enumerate(parts):
+        n = len(parts[k])
+        piece = tmp_path / f"part{k}.csv"
+        whole.iloc[row : row + n].to_csv(piece, index=False)
+        _invoke("compensate", piece, tmp_path / "m.json", "--out", tmp_path / f"part{k}.parquet")
+        alone = pd.read_parquet(tmp_path / f"part{k}.parquet")
+        assert_allclose(frame["compensated"].iloc[row : row + n], alone["compensated"], rtol=0, atol=1e-12)
+        row += n
+
+
+def test_lsm6dsm_bursts_train_and_compensate_by_segments(real_data, tmp_path):
+    """The PAN LSM6DSM cold TVAC log: 25 bursts of 5 s, duplicate stamps, three axes.
+
+    The temperature slope of a linear model trained on every sample of every
+    burst agrees with the linear fit on the 25 burst medians that the data's
+    README gives (X +0.0301, Y -0.0142, Z +0.0014 deg/s/degC), recomputed
+    here with numpy from the file alone.
+    """
+    from gyrocomp.pipeline.compensate import load_models
+
+    LSM6DSM = real_data("pan-lsm6dsm-tvac") / "pan_lsm6dsm_tvac_cold_2020-03-07.csv"
+    model = _train(
+        LSM6DSM, tmp_path / "m.json", "rate_x,rate_y,rate_z", "--temp-col", "temperature", "--dedupe", "first",
+        "--set", "model.drift.degree=1", "--set", "model.drift.rate_term=false",
+    )
+    raw = pd.read_csv(LSM6DSM)
+    burst = np.concatenate([[0], np.cumsum(np.diff(raw["time"].to_numpy()) > 1.0)])
+    medians = raw.groupby(burst).median()
+    readme = {"rate_x": 0.0301, "rate_y": -0.0142, "rate_z": 0.0014}
+    models = load_models(model)
+    for axis, published in readme.items():
+        assert model["axes"][axis]["training"]["n_segments"] == 25
+        slope = np.diff(models[axis].predict(np.array([[15.0, 0.0], [25.0, 0.0]]))["drift"])[0] / 10.0
+        by_medians = np.polyfit(medians["temperature"], medians[axis], 1)[0]
+        assert_allclose(by_medians, published, atol=5e-5)
+        assert_allclose(slope, by_medians, rtol=0.1, atol=2e-4)
+    out = tmp_path / "c.parquet"
+    _invoke("compensate", LSM6DSM, tmp_path / "m.json", "--rate-col", "rate_*", "--dedupe", "first", "--out", out)
+    frame = pd.read_parquet(out)
+    assert len(frame) == len(raw) - 5  # five duplicate stamps merged, no gap filled
+    assert np.std(frame["rate_x_compensated"]) < 0.4 * np.std(frame["rate_x"])  # X drifts -0.25 deg/s over the ramp
