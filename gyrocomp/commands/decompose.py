@@ -10,7 +10,7 @@ from typing import Callable, Optional, Sequence
 from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
-__all__ = ["Options", "to_files", "write"]
+__all__ = ["Options", "to_files", "write", "table"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -113,24 +113,31 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
     decomposition : gyrocomp.decompose.Decomposition
     sidecar : dict
     """
-    import pandas as pd
-
     from gyrocomp import artefacts
     from gyrocomp.config import settings_dict
     from gyrocomp.decompose import SIDECAR_SCHEMA, component_stats, decompose
 
     result = decompose(recording.rate_dps, settings, seed=seed, workers=workers, callback=progress)
+    frame, header = table(recording, result, settings, seed)
+    sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=header["inputs"], settings=header["settings"], seed=seed)
+    sidecar.update(method=settings.method, fs_hz=recording.fs_hz, **component_stats(result, recording.fs_hz))
+    artefacts.write_table(out, frame, header)
+    artefacts.write_json(Path(out).with_suffix(".json"), sidecar)
+    return result, sidecar
+
+
+def table(recording, result, settings, seed: int):
+    """The ``components.parquet`` table of a decomposition and its header (see :func:`write`)."""
+    import pandas as pd
+
+    from gyrocomp import artefacts
+    from gyrocomp.config import settings_dict
+
     frame = pd.DataFrame({"time": recording.time_s, "rate": recording.rate_dps})
     if recording.temperature_c is not None:
         frame["temperature"] = recording.temperature_c
     for name, values in zip(result.names, result.components):
         frame[name] = values
-    resolved = settings_dict(settings)
-    records = [recording.input_record()]
-    header = artefacts.artefact_header("gyrocomp.components", inputs=records, settings=resolved, seed=seed)
+    header = artefacts.artefact_header("gyrocomp.components", inputs=[recording.input_record()], settings=settings_dict(settings), seed=seed)
     header.update(components=list(result.names), fs_hz=recording.fs_hz, axis=recording.axes[0].name, unit=recording.axes[0].unit)
-    sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=records, settings=resolved, seed=seed)
-    sidecar.update(method=settings.method, fs_hz=recording.fs_hz, **component_stats(result, recording.fs_hz))
-    artefacts.write_table(out, frame, header)
-    artefacts.write_json(Path(out).with_suffix(".json"), sidecar)
-    return result, sidecar
+    return frame, header

@@ -49,17 +49,19 @@ def written(out, options) -> list:
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options()) -> dict:
     """Fit the drift models of a pipeline and write ``model.json``.
 
-    A direct pipeline fits one model per sensor axis of the recording
-    (every sample of every gap-free segment; the temperature rate never
-    spans a gap), each with the same seed, in ``options.workers``
-    processes. A parallel pipeline fits the one axis its components were
-    decomposed from.
+    Given a recording, a model is fitted per sensor axis, each with the
+    same seed, in ``options.workers`` processes: a direct pipeline on
+    every sample of every gap-free segment (the temperature rate never
+    spans a gap); a parallel pipeline decomposes and classifies each axis
+    first, as ``decompose`` and ``classify`` would (one continuous run: a
+    gap is refused). Given components and classes, a parallel pipeline fits
+    the one axis they were decomposed from.
 
     Parameters
     ----------
     inputs : sequence of path-like
-        ``[components.parquet, classes.json]`` for a parallel pipeline,
-        ``[recording]`` (with temperature) for a direct one.
+        ``[recording]`` (with temperature), or ``[components.parquet,
+        classes.json]`` for a parallel pipeline.
     out : path-like
         ``model.json`` to write (:func:`gyrocomp.pipeline.train.model_file`:
         a model per axis under ``axes``, named after the axes' columns).
@@ -80,9 +82,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     cfg = check_tables(apply_overrides(load_config(options.config), options.overrides), PIPELINE_TABLES, options.config)
     pipeline = pipeline_settings(cfg, options.config)
     source, *rest = inputs
-    if pipeline.parallel:
-        if not rest:
-            raise InputError(f"{options.config}: a parallel pipeline needs CLASSES (classes.json from `gyrocomp classify`)")
+    if pipeline.parallel and rest:
         (classes,) = rest
         frame, header = artefacts.read_table(source, "gyrocomp.components")
         labels = artefacts.read_json(classes, "gyrocomp.classes")
@@ -93,7 +93,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     else:
         if rest:
             raise InputError(f"{options.config}: a direct pipeline ({pipeline.kind}) trains on the recording alone; drop {rest[0]}")
-        recording = recordings.read_recording(source, options.columns, require_temperature=True, min_samples=16, allow_gaps=True)
+        recording = recordings.read_recording(source, options.columns, require_temperature=True, min_samples=16, allow_gaps=not pipeline.parallel)
         trained = train_axes(recording, cfg, source=options.config, seed=options.seed, workers=options.workers)
         units = {axis.name: axis.unit for axis in recording.axes}
     model = model_file(trained, units)
@@ -102,11 +102,12 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
 
 
 def train_axes(recording, config: dict, *, source: str, seed: int | None, workers: int = 1) -> dict:
-    """A direct pipeline's model of every axis of a recording, by axis name in the recording's order.
+    """A pipeline's model of every axis of a recording, by axis name in the recording's order.
 
-    Each axis is trained alone (:func:`gyrocomp.pipeline.train.train_direct`
-    on :meth:`~gyrocomp.recordings.Recording.axis`, over its gap-free
-    segments) with the same seed, so the models do not depend on `workers`.
+    Each axis is trained alone (:meth:`~gyrocomp.recordings.Recording.axis`;
+    :func:`gyrocomp.pipeline.train.train_direct` over its gap-free segments,
+    or decomposed, classified and :func:`~gyrocomp.pipeline.train.train_parallel`)
+    with the same seed, so the models do not depend on `workers`.
     """
     from gyrocomp.batch.backends import run_local
 
@@ -122,6 +123,19 @@ def train_axes(recording, config: dict, *, source: str, seed: int | None, worker
 
 
 def _train_axis(task: dict) -> dict:
-    from gyrocomp.pipeline.train import train_direct
+    from gyrocomp.classify import ClassifySettings, classify
+    from gyrocomp.commands.decompose import table
+    from gyrocomp.config import bind, settings_dict
+    from gyrocomp.decompose import DecomposeSettings, decompose
+    from gyrocomp.pipeline.settings import pipeline_settings
+    from gyrocomp.pipeline.train import train_direct, train_parallel
 
-    return train_direct(task["recording"], task["config"], source=task["source"], seed=task["seed"], bounds=task["bounds"])
+    recording, config, source, seed = task["recording"], task["config"], task["source"], task["seed"]
+    if not pipeline_settings(config, source).parallel:
+        return train_direct(recording, config, source=source, seed=seed, bounds=task["bounds"])
+    settings = bind(DecomposeSettings, config.get("decompose"), f"{source} [decompose]")
+    classify_settings = bind(ClassifySettings, config.get("classify"), f"{source} [classify]")
+    result = decompose(recording.rate_dps, settings, seed=seed)
+    frame, header = table(recording, result, settings, seed)
+    classes = {"settings": settings_dict(classify_settings), "components": classify(result.components, result.names, classify_settings)}
+    return train_parallel(frame, header, classes, config, source=source, seed=seed, inputs=[recording.input_record()])

@@ -48,7 +48,7 @@ def _invoke(*args) -> None:
 
 
 def _train(path, out, rate_col, *extra) -> dict:
-    _invoke("train", path, "--config", "polynomial", "--rate-col", rate_col, "--temp-col", "temp", *extra, "--out", out)
+    _invoke("train", path, "--config", "polynomial", "--rate-col", rate_col, "--temp-col", "temp", *extra, "--out", out)  # a later --config or --temp-col wins
     return json.loads(Path(out).read_text())
 
 
@@ -215,3 +215,19 @@ def test_lsm6dsm_bursts_train_and_compensate_by_segments(real_data, tmp_path):
     frame = pd.read_parquet(out)
     assert len(frame) == len(raw) - 5  # five duplicate stamps merged, no gap filled
     assert np.std(frame["rate_x_compensated"]) < 0.4 * np.std(frame["rate_x"])  # X drifts -0.25 deg/s over the ramp
+
+
+def test_a_parallel_pipeline_trains_every_axis_as_its_decompose_classify_train_chain(log3, tmp_path):
+    """`train REC --config pe-lcd-anfis` decomposes and classifies each axis as the three commands do."""
+    path, _ = log3
+    fast = ["--set", "model.drift.epochs=5", "--set", "model.mixed.epochs=5"]
+    model = _train(path, tmp_path / "model.json", "gx,gz", "--config", "pe-lcd-anfis", "--workers", "2", *fast)
+    for axis in ("gx", "gz"):
+        comps, classes = tmp_path / f"{axis}.parquet", tmp_path / f"{axis}.json"
+        _invoke("decompose", path, "--config", "pe-lcd-anfis", "--rate-col", axis, "--temp-col", "temp", "--out", comps)
+        _invoke("classify", comps, "--config", "pe-lcd-anfis", "--out", classes)
+        _invoke("train", comps, classes, "--config", "pe-lcd-anfis", *fast, "--out", tmp_path / f"{axis}_model.json")
+        chain = json.loads((tmp_path / f"{axis}_model.json").read_text())
+        assert list(chain["axes"]) == [axis]
+        assert model["axes"][axis]["segments"] == chain["axes"][axis]["segments"]
+        assert model["axes"][axis]["training"] == chain["axes"][axis]["training"]

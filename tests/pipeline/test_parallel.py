@@ -106,8 +106,6 @@ def test_bad_model_files_exit_2(tmp_path, oven_files):
 
 def test_train_refuses_mismatched_inputs(tmp_path, oven_files):
     train_path, _ = oven_files
-    result = runner.invoke(app, ["train", str(train_path), "--config", "pe-lcd-anfis", "--out", str(tmp_path / "m.json")])
-    assert result.exit_code == 2 and "needs CLASSES" in result.output
     result = runner.invoke(app, ["train", str(train_path), str(train_path), "--config", "elm", "--out", str(tmp_path / "m.json")])
     assert result.exit_code == 2 and "recording alone" in result.output
     result = runner.invoke(app, ["train", str(train_path), "--config", "elm", "--set", "model.drift.n_hiden=3", "--out", str(tmp_path / "m.json")])
