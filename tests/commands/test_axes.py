@@ -140,7 +140,7 @@ def test_accelerometer_axes_keep_their_unit(tmp_path):
     """An accelerometer axis in g trains and compensates in m/s^2, and says so."""
     rng = np.random.default_rng(3)
     t = np.arange(3600.0)
-    temperature = 20.0 + 10.0 * t / 3600.0
+    temperature = 20.0 + 10.0 * np.sin(2 * np.pi * t / 3600.0)
     ax_g = 1e-3 * (temperature - 20.0) + 1e-4 * rng.standard_normal(t.size)
     path = tmp_path / "acc.csv"
     pd.DataFrame({"time": t, "ax": ax_g, "temperature": temperature}).to_csv(path, index=False)
