@@ -84,24 +84,27 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
 
     settings = al.get_config(options.config)
     column = options.column
-    series, records = [], []
+    series, records, units = [], [], []
     for path in inputs:
         rec = recordings.read_recording(path, options.columns, min_samples=3, resample=options.resample, usecols=[] if column == "rate" else [column])
         if column == "rate":
-            values = {axis: rec.axis(axis).rate_dps for axis in rec.axis_names}
+            values = {axis.name: (rec.axis(axis.name).rate_dps, axis.unit) for axis in rec.axes}
         elif column in rec.columns:
-            values = {column: rec.column(column)}
+            values = {column: (rec.column(column), "deg/s")}
         else:
             raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
-        for name, x in values.items():
-            series.append(al.analyse(x, rec.fs_hz, taus=options.taus, name=Path(rec.name).name, column=name, settings=settings))
+        for name, (x, unit) in values.items():
+            one = al.analyse(x, rec.fs_hz, taus=options.taus, name=Path(rec.name).name, column=name, settings=settings)
+            _relabel(one, unit)
+            series.append(one)
+            units.append(unit)
         records.append(rec.input_record())
         del rec, values
     resolved = {**settings_dict(settings), "taus": options.taus or settings.taus, "column": column}
     artefacts.write_json(out, al.allan_artefact(series, inputs=records, settings=resolved))
     if options.plot is not None:
         with PLOT_LOCK:
-            al.plot_allan(series, options.plot)
+            al.plot_allan(series, options.plot, unit=", ".join(dict.fromkeys(units)) or "deg/s")
     return series
 
 
@@ -110,3 +113,21 @@ def check(series: Sequence, options: Options) -> None:
     from gyrocomp.allan import check_thresholds
 
     check_thresholds(series, max_arw=options.max_arw, max_bias_instability=options.max_bias_instability, max_rrw=options.max_rrw)
+
+
+_INTEGRATED = {"deg/s": "deg", "m/s^2": "m/s"}
+"""The integral over time of each quantity's unit: what the IEEE 952 term units are built on."""
+
+
+def _relabel(series, unit: str) -> None:
+    """Give the terms of an axis in `unit` (an acceleration) their units, in place.
+
+    The terms are computed for deg/s with factors that only turn seconds
+    into hours (:data:`gyrocomp.allan` ``_TERMS``), so for an axis in m/s^2
+    the same values hold with ``m/s`` in place of ``deg``: velocity random
+    walk [m/s/sqrt(h)], bias instability [m/s/h], acceleration random walk
+    [m/s/h/sqrt(h)] (IEEE Std 1293, Annex C).
+    """
+    if unit != "deg/s":
+        for term in series.terms.values():
+            term["unit"] = term["unit"].replace("deg", _INTEGRATED[unit], 1)

@@ -152,6 +152,10 @@ def test_accelerometer_axes_keep_their_unit(tmp_path):
     assert_allclose(frame["ax"], ax_g * 9.80665, rtol=1e-12)  # standard gravity, CGPM 1901
     assert json.loads(out.with_suffix(".json").read_text())["axes"]["ax"]["unit"] == "m/s^2"
     assert np.std(frame["ax_compensated"]) < 2e-3 * np.std(frame["ax"]) + 2e-3
+    _invoke("allan", path, "--rate-col", "ax", "--rate-unit", "g", "--taus", "1,2,4,8", "--out", tmp_path / "allan.json")
+    terms = json.loads((tmp_path / "allan.json").read_text())["series"][0]["terms"]
+    assert terms["arw"]["unit"] == "m/s/sqrt(h)" and terms["bias_instability"]["unit"] == "m/s/h"
+    assert_allclose(terms["arw"]["value"], 1e-4 * 9.80665 * 60, rtol=0.1)  # velocity random walk of 1e-4 g white noise at 1 Hz
 
 
 def test_gaps_are_segments_never_bridged(tmp_path):
@@ -231,3 +235,23 @@ def test_a_parallel_pipeline_trains_every_axis_as_its_decompose_classify_train_c
         assert list(chain["axes"]) == [axis]
         assert model["axes"][axis]["segments"] == chain["axes"][axis]["segments"]
         assert model["axes"][axis]["training"] == chain["axes"][axis]["training"]
+
+
+def test_batch_passes_the_axes_and_reports_each(log3, tmp_path):
+    """`batch allan|compensate --rate-col gx,gy,gz`: the key figures per axis, the command's own outputs."""
+    from gyrocomp.batch import run_batch
+
+    path, _ = log3
+    columns = {"rate_col": "gx,gy,gz", "temp_col": "temp"}
+    result = run_batch("allan", [str(path)], tmp_path / "allan", workers=1, options={**columns, "taus": "1,2,4,8"})
+    row = result.rows[0]
+    series = json.loads((tmp_path / "allan" / "log3" / "allan.json").read_text())["series"]
+    for axis, s in zip(AXES, series):
+        assert row[f"{axis}_arw_fit"] == s["terms"]["arw"]["value"]
+        assert_allclose(row[f"{axis}_arw_fit"], 60 * NOISE_DPS, rtol=0.1)  # N = sigma * sqrt(1 s) * 60 [deg/sqrt(h)]
+    _train(path, tmp_path / "model.json", "gx,gy,gz")
+    result = run_batch("compensate", [str(path)], tmp_path / "comp", workers=1, options=columns, files={"model": tmp_path / "model.json"})
+    row = result.rows[0]
+    assert result.exit_code == 0, row
+    for axis in AXES:
+        assert row[f"{axis}_compensated_drift_std_deg_h"] < 0.1 * row[f"{axis}_drift_std_deg_h"], axis
