@@ -6,7 +6,7 @@ import importlib
 import os
 import signal
 
-from gyrocomp.cli._app import app, raise_on_sigterm
+from gyrocomp.cli._app import app, closed_pipe, raise_on_sigterm
 
 _COMMANDS = ("simulate", "allan", "decompose", "train", "compensate", "export", "run", "batch", "diagnose", "classify")
 """Command modules of this package; each registers its commands on ``app``."""
@@ -34,7 +34,10 @@ def main() -> None:
     for variable in _BLAS_THREAD_VARIABLES:
         os.environ.setdefault(variable, "1")
     signal.signal(signal.SIGTERM, raise_on_sigterm)
-    app()
+    try:
+        app()
+    except BrokenPipeError:  # stdout closed outside a command (e.g. `gyrocomp --help | head -1`)
+        raise SystemExit(closed_pipe()) from None
 
 
 __all__ = ["app", "main"]

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import os
 import signal
 import sys
+import time
 import traceback
 from pathlib import Path
 from typing import Annotated, Callable, Iterator, Optional
@@ -21,7 +23,33 @@ from rich.console import Console
 
 from gyrocomp import __version__
 
+class _Group(typer.core.TyperGroup):
+    """The command group; the global flags (:data:`GLOBAL_FLAGS`) are accepted after the sub-command too.
+
+    ``gyrocomp allan x.csv --out a.json --quiet`` is read as
+    ``gyrocomp --quiet allan x.csv --out a.json``: a flag found after the
+    sub-command's name (and before a ``--``) is moved in front of it.
+    """
+
+    def parse_args(self, ctx, args: list[str]) -> list[str]:
+        return super().parse_args(ctx, globals_first(args))
+
+
+GLOBAL_FLAGS = ("--quiet", "-q", "--debug")
+"""Options of the whole program that no sub-command defines, so they may follow it."""
+
+
+def globals_first(args: list[str]) -> list[str]:
+    """`args` with the :data:`GLOBAL_FLAGS` that follow the sub-command moved before it."""
+    command = next((i for i, a in enumerate(args) if not a.startswith("-")), len(args))
+    end = args.index("--") if "--" in args[command:] else len(args)
+    moved = [a for a in args[command + 1 : end] if a in GLOBAL_FLAGS]
+    kept = [a for a in args[command + 1 : end] if a not in GLOBAL_FLAGS]
+    return [*args[:command], *moved, *args[command : command + 1], *kept, *args[end:]]
+
+
 app = typer.Typer(
+    cls=_Group,
     name="gyrocomp",
     help="Temperature-drift compensation and Allan-variance scoring of MEMS gyroscope oven-test logs.",
     no_args_is_help=True,
@@ -88,6 +116,24 @@ def console_for(ctx: typer.Context, out: Path | str | None = None) -> Console:
     return console
 
 
+SIGPIPE_EXIT = 141
+"""Exit code when the reader of stdout went away (``| head``): 128 + SIGPIPE, as a shell reports a tool SIGPIPE ended."""
+
+
+def closed_pipe() -> int:
+    """After a :class:`BrokenPipeError` on stdout: point stdout at /dev/null, return :data:`SIGPIPE_EXIT`.
+
+    The reader (``head``) has all it asked for, so this is no error: no
+    message, no traceback, and no second BrokenPipeError when Python
+    flushes stdout at exit.
+    """
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    with contextlib.suppress(OSError, ValueError):
+        os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+    return SIGPIPE_EXIT
+
+
 @contextlib.contextmanager
 def report_errors(ctx: typer.Context) -> Iterator[None]:
     """Turn a library error into one line on stderr and its exit code.
@@ -103,6 +149,8 @@ def report_errors(ctx: typer.Context) -> Iterator[None]:
         yield
     except typer.Exit:
         raise
+    except BrokenPipeError:
+        raise typer.Exit(closed_pipe())
     except KeyboardInterrupt as err:
         print(f"gyrocomp: {'terminated' if isinstance(err, Terminated) else 'interrupted'}", file=sys.stderr)
         raise typer.Exit(128 + getattr(err, "signum", signal.SIGINT))
@@ -118,27 +166,78 @@ def report_errors(ctx: typer.Context) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def progress(ctx: typer.Context, description: str, out: Path | str | None = None) -> Iterator[Callable[[int, int], None]]:
-    """A rich progress bar on stderr; yields ``callback(done, total)`` for the library."""
+def progress(ctx: typer.Context, description: str, out: Path | str | None = None) -> Iterator[Callable[..., None]]:
+    """Progress on stderr; yields ``callback(done, total, description=None)`` for the library.
+
+    On a terminal, a rich progress bar. Otherwise (cron, CI, a log file) one
+    line at most every :data:`LOG_EVERY_S` seconds (:class:`LogLines`), so
+    a long ``run`` or ``diagnose`` shows it is alive without flooding the
+    log. Nothing with ``--quiet``.
+    """
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     st = state(ctx)
+    console = Console(stderr=True, quiet=st.quiet)
+    if not console.is_terminal:
+        lines = LogLines(console, description)
+        lines(0, 0)  # the first line at once: the log shows the command started
+        yield lines
+        return
     bar = Progress(
         TextColumn("{task.description}"),
         BarColumn(),
         MofNCompleteColumn(),
         TimeElapsedColumn(),
-        console=Console(stderr=True, quiet=st.quiet),
+        console=console,
         transient=True,
         disable=st.quiet,
     )
     task = bar.add_task(description, total=None)
 
-    def update(done: int, total: int) -> None:
-        bar.update(task, completed=done, total=total)
+    def update(done: int, total: int, description: str | None = None) -> None:
+        bar.update(task, completed=done, total=total or None, **({} if description is None else {"description": description}))
 
     with bar:
         yield update
+
+
+LOG_EVERY_S = 10.0
+"""Fewest seconds between two progress lines when stderr is not a terminal."""
+
+
+class LogLines:
+    """Progress as plain lines, at most one every `every_s` seconds (the first at once).
+
+    Parameters
+    ----------
+    console : rich.console.Console
+        Where the lines go (stderr).
+    description : str
+        What is progressing; a call may replace it.
+    every_s : float
+        Fewest seconds between two lines.
+    clock : callable
+        Seconds, monotonic (:func:`time.monotonic`).
+    """
+
+    def __init__(self, console: Console, description: str, every_s: float = LOG_EVERY_S, clock: Callable[[], float] = time.monotonic):
+        self.console = console
+        self.description = description
+        self.every_s = every_s
+        self.clock = clock
+        self.start = clock()
+        self.last: float | None = None
+
+    def __call__(self, done: int, total: int, description: str | None = None) -> None:
+        if description is not None:
+            self.description = description
+        now = self.clock()
+        if self.last is not None and now - self.last < self.every_s:
+            return
+        self.last = now
+        share = f" ({100.0 * done / total:.0f}%)" if total else ""
+        count = f"{done}/{total}" if total else (f"{done}" if done else "started")
+        self.console.print(f"gyrocomp: {self.description}: {count}{share}, {now - self.start:.0f} s", markup=False, highlight=False, soft_wrap=True)
 
 
 # Options shared by every command that reads a recording.

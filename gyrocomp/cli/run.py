@@ -19,8 +19,8 @@ from gyrocomp.cli._app import (
     TimeUnit,
     app,
     console_for,
+    progress,
     report_errors,
-    state,
 )
 
 
@@ -52,26 +52,12 @@ def run(
     processing: share kept, RMS error), training and per-stage times.
     """
     with report_errors(ctx):
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-        from rich.console import Console
-
         from gyrocomp.commands import from_params, run as stage
 
-        bar = Progress(
-            TextColumn("{task.description:<48}"),
-            BarColumn(),
-            TimeElapsedColumn(),
-            console=Console(stderr=True, quiet=state(ctx).quiet),
-            transient=True,
-            disable=state(ctx).quiet,
-        )
-        with bar:
-            task = bar.add_task("start", total=None)
-
-            def update(stage: str, done: int, total: int) -> None:
-                bar.update(task, description=stage, completed=done, total=total or None)
-
-            report = stage.to_files([config, train_rec], out, from_params(stage.Options, ctx.params), progress=update)
+        with progress(ctx, "run") as update:
+            report = stage.to_files(
+                [config, train_rec], out, from_params(stage.Options, ctx.params), progress=lambda name, done, total: update(done, total, name)
+            )
     _print(console_for(ctx), report, out)
 
 
