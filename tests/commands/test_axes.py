@@ -87,9 +87,9 @@ def test_one_compensate_writes_every_axis_as_the_single_axis_runs_do(log3, tmp_p
     sidecar = json.loads(out.with_suffix(".json").read_text())
     assert list(sidecar["axes"]) == list(AXES)
     for axis in AXES:
-        _train(path, tmp_path / f"{axis}.json", axis)
+        _train(path, tmp_path / f"{axis}_model.json", axis)
         single = tmp_path / f"{axis}.parquet"
-        _invoke("compensate", path, tmp_path / f"{axis}.json", "--rate-col", axis, "--temp-col", "temp", "--out", single)
+        _invoke("compensate", path, tmp_path / f"{axis}_model.json", "--rate-col", axis, "--temp-col", "temp", "--out", single)
         assert_allclose(frame[f"{axis}_compensated"], pd.read_parquet(single)[f"{axis}_compensated"], rtol=0, atol=1e-12)
         # what is left is the noise the test put in (plus a constant): the drift is gone
         left = frame[f"{axis}_compensated"].to_numpy() - noise[axis]
@@ -105,8 +105,8 @@ def test_a_version_1_model_still_compensates(log3, tmp_path):
     old = {"schema": {"name": "gyrocomp.model", "version": "1.0"}, **header, **entry}
     (tmp_path / "old.json").write_text(json.dumps(old))
     for name in ("model", "old"):
-        _invoke("compensate", path, tmp_path / f"{name}.json", "--rate-col", "gy", "--temp-col", "temp", "--out", tmp_path / f"{name}.parquet")
-    assert_allclose(pd.read_parquet(tmp_path / "old.parquet")["gy_compensated"], pd.read_parquet(tmp_path / "model.parquet")["gy_compensated"], atol=0)
+        _invoke("compensate", path, tmp_path / f"{name}.json", "--rate-col", "gy", "--temp-col", "temp", "--out", tmp_path / f"{name}_comp.parquet")
+    assert_allclose(pd.read_parquet(tmp_path / "old_comp.parquet")["gy_compensated"], pd.read_parquet(tmp_path / "model_comp.parquet")["gy_compensated"], atol=0)
 
 
 def test_compensate_names_an_axis_the_model_lacks(log3, tmp_path):
@@ -227,7 +227,7 @@ def test_a_parallel_pipeline_trains_every_axis_as_its_decompose_classify_train_c
     fast = ["--set", "model.drift.epochs=5", "--set", "model.mixed.epochs=5"]
     model = _train(path, tmp_path / "model.json", "gx,gz", "--config", "pe-lcd-anfis", "--workers", "2", *fast)
     for axis in ("gx", "gz"):
-        comps, classes = tmp_path / f"{axis}.parquet", tmp_path / f"{axis}.json"
+        comps, classes = tmp_path / f"{axis}.parquet", tmp_path / f"{axis}_classes.json"
         _invoke("decompose", path, "--config", "pe-lcd-anfis", "--rate-col", axis, "--temp-col", "temp", "--out", comps)
         _invoke("classify", comps, "--config", "pe-lcd-anfis", "--out", classes)
         _invoke("train", comps, classes, "--config", "pe-lcd-anfis", *fast, "--out", tmp_path / f"{axis}_model.json")
