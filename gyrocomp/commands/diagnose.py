@@ -73,13 +73,21 @@ def to_files(
     from gyrocomp import artefacts, recordings
     from gyrocomp.commands import PLOT_LOCK
     from gyrocomp.config import settings_dict
-    from gyrocomp.diagnose import diagnose, get_config
+    from gyrocomp.diagnose import diagnose, get_config, unexplained
     from gyrocomp.diagnose.report import plot_gap, to_json, to_markdown
 
     (fit,) = inputs
     settings = get_config(options.config)
-    fit_rec = recordings.read_recording(fit, options.columns, resample=options.resample, min_samples=64).axis()
-    hold_rec = recordings.read_recording(options.holdout, options.columns, resample=options.resample, min_samples=64).axis() if options.holdout else None
+    unexplained_settings = unexplained.get_config()
+
+    def read(path):
+        # A recording with gaps is diagnosed by segments (gyrocomp.diagnose.problems), never interpolated.
+        return recordings.read_recording(
+            path, options.columns, resample=options.resample, allow_gaps=not options.resample, min_samples=64
+        ).axis()
+
+    fit_rec = read(fit)
+    hold_rec = read(options.holdout) if options.holdout else None
     start = ()
     if options.sim is not None:
         from gyrocomp.sim.model import load_sim_config
@@ -88,9 +96,11 @@ def to_files(
     bodies = {}
     for axis in fit_rec.axis_names:
         held = None if hold_rec is None else hold_rec.axis(axis if len(fit_rec.axes) > 1 else None)
-        bodies[axis] = diagnose(fit_rec.axis(axis), held, settings, start_effects=start, callback=progress)
+        bodies[axis] = diagnose(
+            fit_rec.axis(axis), held, settings, start_effects=start, callback=progress, unexplained_settings=unexplained_settings
+        )
     records = [fit_rec.input_record()] + ([hold_rec.input_record()] if hold_rec else [])
-    report = to_json({}, inputs=records, settings=settings_dict(settings))
+    report = to_json({}, inputs=records, settings={**settings_dict(settings), "unexplained": settings_dict(unexplained_settings)})
     verdicts = {axis: {**report, **to_json(body, inputs=records, settings=report["settings"]), "axis": axis} for axis, body in bodies.items()}
     if len(verdicts) == 1:
         report = next(iter(verdicts.values()))

@@ -157,10 +157,11 @@ def diagnose(
         selected, first_step, steps, baseline = greedy(fit_p, hold_p, candidates, callback=callback, start=start)
         models = {"baseline": baseline, "selected": selected}
         white = sample_arw(fit_p.run)
-        gaps = {name: _gaps(fit_p, hold_p, m, white) for name, m in models.items()}
+        gapped = fit_p.run.gapped or (hold_p is not None and hold_p.run.gapped)
+        gaps = {name: _gaps(fit_p, hold_p, m, white, gapped) for name, m in models.items()}
         cand = {}
         for effect, model in first_step.items():
-            g = _gaps(fit_p, hold_p, model, white)
+            g = _gaps(fit_p, hold_p, model, white, gapped)
             cand[effect] = {
                 "params": effect_params(effect, model.spec, model.beta, model.names, model.noise),
                 "gap_fit": g["fit"]["total"],
@@ -174,10 +175,13 @@ def diagnose(
                 if effect in selected.order
                 else detection_limit(runs, selected, effect, first_step[effect].spec.get(effect, {}), s.bic_margin, s.detection_power)
             )
-        local = _localization(fit_p, hold_p, models, gaps, s, white)
+        local = {} if gapped else _localization(fit_p, hold_p, models, gaps, s, white)
         labelled = [("fit", fit_p)] + ([("holdout", hold_p)] if hold_p is not None else [])
         verdict = _unexplained.verdict(
-            labelled, selected, unexplained_settings, [gaps["baseline"][label]["residual"] for label, _ in labelled]
+            labelled,
+            selected,
+            unexplained_settings,
+            None if gapped else [gaps["baseline"][label]["residual"] for label, _ in labelled],
         )
     order = [e for e in selected.order if e not in start_effects]
     return {
@@ -197,12 +201,23 @@ def diagnose(
             for name, g in gaps.items()
         },
         "unexplained": verdict,
+        **(
+            {"gap_note": "recording in segments with gaps: the scalar gap and the localization need a contiguous record "
+             "(100 s means, Allan taus) and are not computed; selection and the unexplained tests use block means within segments"}
+            if gapped
+            else {}
+        ),
         "candidates": cand,
         "selection_steps": steps,
         "skipped": skipped,
         "models": {name: _model_dict(m, start_effects) for name, m in models.items()},
         "localization": local,
-        "blocks": {"block_s": fit_p.run.block_s, "n_fit": fit_p.y.size, "n_holdout": hold_p.y.size if hold_p else None},
+        "blocks": {
+            "block_s": fit_p.run.block_s,
+            "n_fit": fit_p.y.size,
+            "n_holdout": hold_p.y.size if hold_p else None,
+            "segments": {"fit": len(segment_lengths(fit)), "holdout": len(segment_lengths(holdout)) if holdout is not None else None},
+        },
         "settings": settings_dict(s),
     }
 
@@ -236,21 +251,58 @@ def problems(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings())
     use_temp = has_temp and not skipped
     degree = s.poly_degree if use_temp else 0
     scale = TemperatureScale.of(fit.temperature_c) if use_temp else None
+    recs = [fit] + ([holdout] if holdout is not None else [])
     block_s = max(s.block_s, (fit.time_s.size / fit.fs_hz) / s.max_blocks)
+    if any(len(segment_lengths(r)) > 1 for r in recs):
+        reason = (
+            "recording in segments with gaps: the element temperature, dT/dt, the hysteresis branch and the "
+            "period scan need a contiguous record (nothing is interpolated across a gap)"
+        )
+        skipped.update({e: reason for e in GAPPED_SKIP if e not in skipped})
+        block_s = min(block_s, min(_block_limit(r) for r in recs))
     fit_p = Problem(_run(fit, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree)
     hold_p = Problem(_run(holdout, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree) if holdout is not None else None
     return fit_p, hold_p, skipped
 
 
+GAPPED_SKIP = ("thermal_lag", "temp_rate", "hysteresis", "periodic")
+"""Effects whose shape needs a contiguous record: skipped on a recording with gaps."""
+
+
+def segment_lengths(rec) -> list:
+    """Samples in each gap-free segment of `rec` (:attr:`gyrocomp.recordings.Recording.segments`)."""
+    segments = getattr(rec, "segments", None) or (slice(0, rec.time_s.size),)
+    return [seg.stop - seg.start for seg in segments]
+
+
+def _block_limit(rec) -> float:
+    """Longest block [s] that fits in every segment of `rec` at least half the median segment's length.
+
+    Shorter segments (a burst cut short) are left out rather than shortening every block.
+    """
+    lengths = np.array(segment_lengths(rec))
+    return float(lengths[lengths >= 0.5 * np.median(lengths)].min() / rec.fs_hz)
+
+
 def _run(rec, block_s, use_temp, smooth_s) -> Run:
+    """`rec` as a :class:`Run`: contiguous, or the whole blocks of each segment (none spans a gap)."""
     n_per = max(1, int(round(block_s * rec.fs_hz)))
-    if rec.time_s.size // n_per < 16:
+    lengths = segment_lengths(rec)
+    gapped = len(lengths) > 1
+    if gapped:
+        starts = [seg.start for seg in rec.segments]
+        keep = np.concatenate([a + np.arange((m // n_per) * n_per) for a, m in zip(starts, lengths)])
+    else:
+        keep = slice(None)
+    n = rec.time_s[keep].size
+    if n // n_per < 16:
         raise InputError(
-            f"{rec.name}: {rec.time_s.size} samples make {rec.time_s.size // n_per} blocks of {block_s:g} s; "
-            "the diagnosis needs at least 16"
+            f"{rec.name}: {n} samples make {n // n_per} blocks of {block_s:g} s"
+            + (f" within its {len(lengths)} segments" if gapped else "")
+            + "; the diagnosis needs at least 16"
         )
-    temperature = rec.temperature_c if use_temp else None
-    return Run(rec.name, rec.time_s, rec.rate_dps, temperature, rec.fs_hz, n_per, smooth_s)
+    temperature = rec.temperature_c[keep] if use_temp else None
+    return Run(rec.name, rec.time_s[keep], rec.rate_dps[keep], temperature, rec.fs_hz, n_per, smooth_s, gapped)
 
 
 def _start_model(problem: Problem, start_effects) -> Fitted:
@@ -267,7 +319,11 @@ def _gap_noise(model: Fitted, white: float):
     return dataclasses.replace(model.noise, arw=white)
 
 
-def _gaps(fit_p, hold_p, model, white):
+def _gaps(fit_p, hold_p, model, white, gapped=False):
+    """The scalar gap on each run; on a recording with gaps, None (its 100 s means and Allan taus need a contiguous record)."""
+    if gapped:
+        empty = {"total": None, "deterministic": None, "stochastic": None, "noise_floor": None, "noise_level": None}
+        return {"fit": empty, "holdout": dict(empty) if hold_p is not None else None}
     s = fit_p.settings
     noise = _gap_noise(model, white)
     r_fit = residual_of(fit_p, model)

@@ -104,6 +104,9 @@ class Run:
     rate_smooth_s : float
         Savitzky-Golay window of dT/dt [s] (:func:`gyrocomp.sim.effects.temperature_rate`):
         a measured temperature is noisy and quantised.
+    gapped : bool
+        The samples are whole blocks of segments with gaps between them
+        (``time_s`` jumps at a gap; no block spans one).
     """
 
     name: str
@@ -113,10 +116,18 @@ class Run:
     fs_hz: float
     n_per_block: int
     rate_smooth_s: float = 0.0
+    gapped: bool = False
 
     @property
     def block_s(self) -> float:
         return self.n_per_block / self.fs_hz
+
+    @property
+    def block_start_s(self) -> np.ndarray | None:
+        """Start of each block after the first sample [s] when `gapped`, else None (contiguous blocks)."""
+        if not self.gapped:
+            return None
+        return self.time_s[: self.n_blocks * self.n_per_block : self.n_per_block] - self.time_s[0]
 
     @property
     def n_blocks(self) -> int:

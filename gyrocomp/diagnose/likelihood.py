@@ -124,19 +124,24 @@ class NoiseBasis:
         Number of blocks.
     block_s : float
         Block length ``T_b`` [s].
+    starts : array_like, shape (n_blocks,), optional
+        Start of each block [s] after power-on, for a recording in segments
+        with gaps between them (default: contiguous blocks, ``i T_b``). The
+        random walk keeps wandering and the flicker decorrelating through a
+        gap; nothing is interpolated.
     """
 
-    def __init__(self, n_blocks, block_s):
+    def __init__(self, n_blocks, block_s, starts=None):
         self.n_blocks = int(n_blocks)
         self.block_s = float(block_s)
         idx = np.arange(self.n_blocks)
         self.white = np.eye(self.n_blocks) / self.block_s
-        start = idx * self.block_s
+        start = idx * self.block_s if starts is None else np.asarray(starts, dtype=float)
         centre = start + 0.5 * self.block_s
         earlier = np.minimum.outer(idx, idx)
         self.random_walk = centre[earlier]
         self.random_walk[idx, idx] = start + self.block_s / 3.0
-        self.flicker = _flicker_block_covariance(self.n_blocks, self.block_s)
+        self.flicker = _flicker_block_covariance(self.n_blocks, self.block_s, None if starts is None else centre)
         self._eig = {}
 
     def covariance(self, noise: NoiseModel):
@@ -323,7 +328,7 @@ def _simplex(x0, step=2.0):
     return np.vstack([x0] + [x0 + step * e for e in np.eye(x0.size)])
 
 
-def _flicker_block_covariance(n_blocks, block_s, per_decade=3):
+def _flicker_block_covariance(n_blocks, block_s, centres=None, per_decade=3):
     """Block-mean covariance of unit-``B`` flicker, as a sum of Gauss-Markov processes.
 
     Time constants run three per decade from ``T_b / 10`` to ``L / (2 pi)``:
@@ -333,13 +338,19 @@ def _flicker_block_covariance(n_blocks, block_s, per_decade=3):
 
     A process with autocovariance ``exp(-|u| / T)`` has, with ``a = T_b / T``,
     block-mean variance ``2 (a - 1 + e^-a) / a^2`` and covariance
-    ``(1 - e^-a)^2 e^-(h-1)a / a^2`` at a lag of ``h >= 1`` blocks.
+    ``(1 - e^-a)^2 e^-(h-1)a / a^2`` at a lag of ``h >= 1`` blocks (with
+    block `centres` [s], ``h`` is their distance over ``T_b``, and ``L`` the
+    span they cover).
     """
-    length = n_blocks * block_s
+    if centres is None:
+        length = n_blocks * block_s
+        lag = np.abs(np.subtract.outer(np.arange(n_blocks), np.arange(n_blocks)))
+    else:
+        length = float(centres[-1] - centres[0]) + block_s
+        lag = np.abs(np.subtract.outer(centres, centres)) / block_s
     exponents = np.arange(
         np.floor(per_decade * np.log10(block_s / 10.0)), np.ceil(per_decade * np.log10(length / (2.0 * np.pi))) + 1
     )
-    lag = np.abs(np.subtract.outer(np.arange(n_blocks), np.arange(n_blocks)))
     cov = np.zeros((n_blocks, n_blocks))
     for tc in 10.0 ** (exponents / per_decade):
         a = block_s / tc

@@ -38,6 +38,8 @@ def to_markdown(report: dict) -> str:
         g = report["gap"][name]
         lines.append(f"| {name} | {_fmt(g['fit'])} | {_fmt(g['holdout'])} |")
     lines.append("| sampling noise (95 %) | {} | {} |".format(*_noise_levels(report)))
+    if report.get("gap_note"):
+        lines += ["", report["gap_note"] + "."]
     lines += [
         "",
         "| candidate | gap fit | gap holdout | delta BIC | parameters | detection limit |",

@@ -133,7 +133,7 @@ class Problem:
 
     def __post_init__(self):
         self.y = block_means(self.run.rate_dps, self.run.n_per_block)
-        self.basis = NoiseBasis(self.y.size, self.run.block_s)
+        self.basis = NoiseBasis(self.y.size, self.run.block_s, self.run.block_start_s)
 
     def design_blocks(self, spec):
         X, names = design(self.run, spec, self.poly_degree, self.scale)
@@ -764,5 +764,8 @@ def sample_arw(run: Run) -> float:
     (IEEE Std 952): the white level the shortest timescales show, which
     slow drift cannot inflate.
     """
-    d = np.diff(run.rate_dps)
+    if run.gapped:  # differences within blocks only: none across a gap
+        d = np.diff(run.rate_dps[: run.n_blocks * run.n_per_block].reshape(run.n_blocks, -1), axis=1)
+    else:
+        d = np.diff(run.rate_dps)
     return float(np.sqrt(max(np.var(d) / 2.0, 1e-300) / run.fs_hz))

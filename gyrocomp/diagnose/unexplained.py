@@ -24,12 +24,13 @@ test                structure                                                   
 ``spectral_line``   a sinusoid at an unknown frequency (at least                  ``m (1 - g)^(m-1)`` [1]_
                     ``line_min_cycles`` cycles in the run): Fisher's ``g`` of
                     the periodogram of ``e``
-``noise_blocks``    a block-level noise that changes over the run: Bartlett's     ``chi^2_(k-1)`` [2]_
-                    test of the variance of ``e`` in ``noise_segments`` segments
-``noise_samples``   a sample-level (white) noise that changes: Bartlett's test    ``chi^2_(k-1)`` [2]_
-                    of the variance of the paired differences
-                    ``x_(2j+1) - x_(2j)`` (independent under white noise; every
-                    slow term cancels) in the same segments
+``noise_blocks``    a block-level noise that changes over the run: the            ``F_(k-1, n-k)`` [2]_
+                    Brown-Forsythe test of the spread of ``e`` in
+                    ``noise_segments`` segments
+``noise_samples``   a sample-level (white) noise that changes: the same test      ``F_(k-1, n-k)`` [2]_
+                    of the paired differences
+                    ``x_(2j+1) - x_(2j)`` within blocks (independent under white
+                    noise; every slow term cancels) in the same segments
 ==================  ===========================================================  ==========================
 
 The score statistic of whitened columns ``G`` is ``|U' e|^2`` with ``U`` an
@@ -56,8 +57,8 @@ References
 ----------
 .. [1] R. A. Fisher, "Tests of significance in harmonic analysis",
    Proc. R. Soc. Lond. A 125, 54-59 (1929).
-.. [2] M. S. Bartlett, "Properties of sufficiency and statistical tests",
-   Proc. R. Soc. Lond. A 160, 268-282 (1937).
+.. [2] M. B. Brown, A. B. Forsythe, "Robust tests for the equality of
+   variances", J. Amer. Statist. Assoc. 69, 364-367 (1974).
 .. [3] S. Holm, "A simple sequentially rejective multiple test procedure",
    Scand. J. Statist. 6, 65-70 (1979).
 """
@@ -73,7 +74,7 @@ from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise
 from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins
 
-__all__ = ["UnexplainedSettings", "get_config", "verdict", "holm", "fisher_g", "bartlett_segments"]
+__all__ = ["UnexplainedSettings", "get_config", "verdict", "holm", "fisher_g", "variance_segments"]
 
 _DEG_H = 3600.0
 """deg/h per deg/s."""
@@ -201,18 +202,23 @@ def fisher_g(e, min_cycles=1):
     return g, float(min(1.0, m * (1.0 - g) ** (m - 1))), j + min_cycles
 
 
-def bartlett_segments(x, n_segments):
-    """Bartlett's test [2]_ that `x` has one variance in `n_segments` consecutive segments.
+def variance_segments(x, n_segments):
+    """Brown-Forsythe test [2]_ that `x` has one spread in `n_segments` consecutive segments.
+
+    Levene's test on absolute deviations from the segment medians: its
+    false-alarm rate holds for heavy tails and a few spikes, where
+    Bartlett's test of the variances calls a spike a change of noise.
 
     Returns
     -------
     stat, p : float
     std : ndarray
-        The standard deviation of each segment (about zero: ``sqrt(mean x^2)``).
+        A robust standard deviation of each segment (``1.4826`` times the
+        median absolute deviation from its median).
     """
     parts = np.array_split(np.asarray(x, dtype=float), n_segments)
-    stat, p = stats.bartlett(*parts)
-    return float(stat), float(p), np.array([np.sqrt(np.mean(q * q)) for q in parts])
+    stat, p = stats.levene(*parts, center="median")
+    return float(stat), float(p), np.array([1.4826 * np.median(np.abs(q - np.median(q))) for q in parts])
 
 
 class _Prepared:
@@ -227,7 +233,8 @@ class _Prepared:
         self.lower = linalg.cholesky(basis.covariance(self.noise), lower=True, check_finite=False)
         n = y.size
         self.block_s = basis.block_s
-        self.t = (np.arange(n) + 0.5) * self.block_s
+        # Block centres after the first sample [s]: the true times, gaps included.
+        self.t = block_means(run.time_s, run.n_per_block)[:n] - run.time_s[0]
         self.columns = {}
         if run.temperature_c is not None:
             temp = block_means(run.temperature_c, run.n_per_block)[:n]
@@ -240,20 +247,22 @@ class _Prepared:
             if heating.sum() >= 2 and cooling.sum() >= 2:
                 self.columns["heating_cooling"] = np.column_stack([heating, cooling, heating * z, cooling * z]).astype(float)
         edges = [e for e in s.poweron_edges_s if e < self.t[-1] / 2.0]
-        self.edges = {"power_on": [0.0] + edges + [float(n * self.block_s)]}
+        end = float(self.t[-1] + 0.5 * self.block_s)
+        self.edges = {"power_on": [0.0] + edges + [end]}
         if edges:
             self.columns["power_on"] = _indicators(self.t, self.edges["power_on"])
-        self.edges["time"] = np.linspace(0.0, n * self.block_s, s.time_segments + 1).tolist()
+        self.edges["time"] = np.linspace(0.0, end, s.time_segments + 1).tolist()
         self.columns["time"] = _indicators(self.t, self.edges["time"])
         self.tests = self._deterministic_tests(np.empty((n, 0)))
         e = self._innovations(np.empty((n, 0)))[0]
-        self.tests["noise_blocks"] = _noise_test(*bartlett_segments(e, s.noise_segments), s)
-        x = np.asarray(run.rate_dps, dtype=float)
-        even = x.size - x.size % 2
-        pairs = (x[1:even:2] - x[0:even:2]) / np.sqrt(2.0)
-        stat, p, std = bartlett_segments(pairs, s.noise_segments)
+        self.tests["noise_blocks"] = _noise_test(*variance_segments(e, s.noise_segments), s)
+        # Pairs within blocks (no block spans a gap), block after block in time.
+        x = np.asarray(run.rate_dps, dtype=float)[: n * run.n_per_block].reshape(n, run.n_per_block)
+        even = run.n_per_block - run.n_per_block % 2
+        pairs = ((x[:, 1:even:2] - x[:, 0:even:2]) / np.sqrt(2.0)).ravel()
+        stat, p, std = variance_segments(pairs, s.noise_segments)
         self.tests["noise_samples"] = _noise_test(stat, p, std * np.sqrt(run.fs_hz), s)
-        self.duration_s = x.size / run.fs_hz
+        self.duration_s = end
         self.kept = []
 
     def _whiten(self, G):
@@ -310,7 +319,7 @@ class _Prepared:
                 kept.append(name)
         if "noise_blocks" in names:
             e = self._innovations(self.structure(kept))[0]
-            if _noise_test(*bartlett_segments(e, self.settings.noise_segments), self.settings)["p"] < alpha:
+            if _noise_test(*variance_segments(e, self.settings.noise_segments), self.settings)["p"] < alpha:
                 kept.append("noise_blocks")
         if "noise_samples" in names:
             kept.append("noise_samples")
@@ -447,7 +456,7 @@ def _noise_test(stat, p, std, s):
     """A noise-change test: significant and at least `noise_min_ratio` between two segments."""
     ratio = float(std.max() / std.min()) if std.min() > 0 else np.inf
     p_eff = p if ratio >= s.noise_min_ratio else 1.0
-    return {"stat": stat, "p": p_eff, "p_bartlett": p, "ratio": ratio, "std": std}
+    return {"stat": stat, "p": p_eff, "p_test": p, "ratio": ratio, "std": std}
 
 
 def _public(result):

@@ -123,13 +123,13 @@ def test_fisher_g_false_alarm_rate():
     assert np.mean(p < 0.05) > 0.02  # the first-term bound is tight in the tail
 
 
-def test_bartlett_segments_calibrated_and_sized():
+def test_variance_segments_calibrated_and_sized():
     rng = np.random.default_rng(1)
-    p = [ux.bartlett_segments(rng.standard_normal(800), 8)[1] for _ in range(500)]
+    p = [ux.variance_segments(rng.standard_normal(800), 8)[1] for _ in range(500)]
     assert stats.kstest(p, "uniform").pvalue > 0.01
     x = rng.standard_normal(800)
     x[400:] *= 2.0
-    _, p, std = ux.bartlett_segments(x, 8)
+    _, p, std = ux.variance_segments(x, 8)
     assert p < 1e-10 and std[-1] / std[0] == pytest.approx(2.0, rel=0.3)
 
 
