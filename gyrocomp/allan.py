@@ -44,7 +44,6 @@ __all__ = [
     "oadev",
     "analyse",
     "allan_artefact",
-    "plot_allan",
     "check_thresholds",
 ]
 
@@ -330,53 +329,6 @@ def check_thresholds(
                     f"{s.name} `{s.column}`: {key} = {value:.4g} {term['unit']} exceeds "
                     f"--max-{key.replace('_', '-')} {bound:g}"
                 )
-
-
-def plot_allan(series: Sequence[AllanSeries], path: str | os.PathLike, *, unit: str = "deg/s") -> None:
-    """Log-log Allan deviation of every series with its confidence band and fitted asymptotes.
-
-    Written atomically as PNG. Dashed lines are the identified terms of the
-    five-term fit, each drawn alone (sqrt of its Allan-variance term).
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
-
-    from gyrocomp.artefacts import atomic_path
-
-    fig = Figure(figsize=(7.5, 5.0), dpi=120)
-    ax = fig.add_subplot()
-    colors = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
-    for i, s in enumerate(series):
-        color = colors[i % len(colors)]
-        label = s.name if s.column == "rate" else f"{s.name} [{s.column}]"
-        ax.fill_between(s.tau_s, s.adev_lo, s.adev_hi, color=color, alpha=0.2, linewidth=0)
-        ax.loglog(s.tau_s, s.adev, "o-", color=color, markersize=3, label=label)
-        tau = np.geomspace(s.tau_s[0], s.tau_s[-1], 100)
-        for key, (basis, term_unit, factor) in _TERMS.items():
-            term = s.terms[key]
-            if not term["identified"]:
-                continue
-            c = (term["value"] / factor) ** 2
-            ax.loglog(tau, np.sqrt(c * basis(tau)), "--", color=color, linewidth=0.9, alpha=0.8)
-            j = len(tau) // 2 if key == "bias_instability" else (5 if key in ("quantization", "arw") else -15)
-            ax.annotate(
-                f"{key} {term['value']:.3g} {term_unit}",
-                (tau[j], math.sqrt(c * float(basis(tau[j : j + 1])[0]))),
-                fontsize=7,
-                color=color,
-            )
-    level = series[0].confidence if series else 0.683
-    ax.set_xlabel("averaging time tau [s]")
-    ax.set_ylabel(f"overlapping Allan deviation [{unit}]")
-    ax.set_title(f"Allan deviation ({level:.1%} chi-square bands; dashed: fitted IEEE 952 terms)", fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
-    if series:
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
 
 
 def _check_fs(fs_hz) -> float:

@@ -10,7 +10,6 @@ the entropy never applies one paper's thresholds to the other's measure.
 from __future__ import annotations
 
 import dataclasses
-import os
 from typing import Sequence
 
 import numpy as np
@@ -26,7 +25,6 @@ __all__ = [
     "classify",
     "class_of",
     "entropy_of",
-    "plot_entropies",
 ]
 
 ENTROPIES = ("permutation", "sample")
@@ -163,34 +161,3 @@ def class_of(value: float, settings: ClassifySettings = ClassifySettings()) -> s
     if value < settings.drift_below:
         return "drift"
     return "mixed"
-
-
-def plot_entropies(entries: Sequence[dict], settings: ClassifySettings, path: str | os.PathLike) -> None:
-    """Bar chart of the entropy per component, coloured by class, with the thresholds (the papers' Fig. 10).
-
-    An infinite sample entropy is drawn at the top of the axis. Written
-    atomically as PNG.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from gyrocomp import artefacts
-
-    colours = {"noise": "tab:red", "mixed": "tab:orange", "drift": "tab:blue"}
-    values = np.array([e["entropy"] for e in entries], dtype=float)
-    finite = values[np.isfinite(values)]
-    cap = 1.1 * max(float(finite.max()) if finite.size else 0.0, settings.noise_above)
-    shown = np.where(np.isfinite(values), values, cap)
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.6 * len(entries) + 2), 3.5), constrained_layout=True)
-    ax.bar([e["name"] for e in entries], shown, color=[colours[e["class"]] for e in entries])
-    ax.axhline(settings.noise_above, color="k", linestyle="--", linewidth=1, label=f"noise above {settings.noise_above:g}")
-    ax.axhline(settings.drift_below, color="k", linestyle=":", linewidth=1, label=f"drift below {settings.drift_below:g}")
-    ax.set_ylabel("permutation entropy (normalised)" if settings.entropy == "permutation" else "sample entropy [nats]")
-    ax.set_xlabel("component")
-    ax.tick_params(axis="x", labelrotation=45)
-    ax.legend(loc="upper right", fontsize="small")
-    with artefacts.atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=120, metadata={"Software": None})
-    plt.close(fig)

@@ -238,7 +238,9 @@ def test_defaults_equal_shipped_toml():
 def test_plot_writes_png(tmp_path):
     s = al.analyse(np.random.default_rng(0).normal(size=20_000), 100.0, name="a")
     out = tmp_path / "allan.png"
-    al.plot_allan([s], out)
+    from gyrocomp import plots
+
+    plots.save(plots.allan_figure([s]), out)
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert [p.name for p in tmp_path.iterdir()] == ["allan.png"]
 

@@ -27,7 +27,7 @@ def classify(
         Optional[List[str]],
         typer.Option("--set", help="Override a setting, e.g. --set classify.sample.m=3 (repeatable)."),
     ] = None,
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG bar chart of the entropy per component with the thresholds (the papers' Fig. 10).")] = None,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: the entropy per component with the thresholds (the papers' Fig. 10) beside the components labelled by class.")] = None,
 ) -> None:
     """Classify each component as noise, mixed or drift by its entropy.
 

@@ -36,6 +36,7 @@ def decompose(
     workers: Annotated[int, typer.Option("--workers", help="Processes for the ensemble; the result does not depend on it.")] = 1,
     config: Annotated[Optional[str], typer.Option("--config", help="Pipeline TOML (path or name in configs/); its [decompose] table is read.")] = None,
     overrides: Annotated[Optional[List[str]], typer.Option("--set", help="Override a setting of [decompose], e.g. --set sd_stop=0.2 (repeatable).")] = None,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of the components stacked, fastest first.")] = None,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",

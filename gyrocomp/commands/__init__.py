@@ -33,7 +33,6 @@ import functools
 import importlib
 import inspect
 import os
-import threading
 from pathlib import PurePath
 from types import ModuleType
 from typing import Any, Callable, Mapping, Sequence
@@ -46,7 +45,6 @@ __all__ = [
     "column_spec",
     "to_settings",
     "from_settings",
-    "PLOT_LOCK",
     "Folder",
     "guarded",
     "check_paths",
@@ -59,11 +57,6 @@ COLUMN_PARAMS = {"time_col": "time", "rate_col": "rate", "temp_col": "temperatur
 """Command-line parameter names of the :class:`~gyrocomp.recordings.ColumnSpec` fields whose names differ.
 
 Every other field of the column spec is read from the parameter of its own name."""
-
-PLOT_LOCK = threading.RLock()
-"""Matplotlib is not thread-safe (its mathtext parser is shared): a Dask worker
-runs several inputs as threads of one process, so figures are drawn one at a time."""
-
 
 def stage(name: str) -> ModuleType:
     """The module of a stage (``Options`` and ``to_files``); :class:`~gyrocomp.errors.InputError` names the choices."""

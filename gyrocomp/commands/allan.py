@@ -78,7 +78,6 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     """
     from gyrocomp import allan as al
     from gyrocomp import artefacts, recordings
-    from gyrocomp.commands import PLOT_LOCK
     from gyrocomp.config import settings_dict
     from gyrocomp.errors import InputError
 
@@ -103,8 +102,9 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     resolved = {**settings_dict(settings), "taus": options.taus or settings.taus, "column": column}
     artefacts.write_json(out, al.allan_artefact(series, inputs=records, settings=resolved))
     if options.plot is not None:
-        with PLOT_LOCK:
-            al.plot_allan(series, options.plot, unit=", ".join(dict.fromkeys(units)) or "deg/s")
+        from gyrocomp import plots
+
+        plots.save(plots.allan_figure(series, unit=", ".join(dict.fromkeys(units)) or "deg/s"), options.plot, dpi=120)
     return series
 
 

@@ -78,7 +78,7 @@ def write(components: str | os.PathLike, settings, out: str | os.PathLike, *, pl
         settings), ``thresholds`` and ``components``
         (:func:`gyrocomp.classify.classify`).
     plot : path-like or None
-        PNG of :func:`gyrocomp.classify.plot_entropies` to write as well.
+        PNG of :func:`gyrocomp.plots.classes_figure` (entropies and the components labelled by class) to write as well.
 
     Returns
     -------
@@ -91,8 +91,8 @@ def write(components: str | os.PathLike, settings, out: str | os.PathLike, *, pl
         The header lists no components, or a listed column is missing.
     """
     from gyrocomp import artefacts
-    from gyrocomp.classify import CLASSES_SCHEMA, classify, plot_entropies
-    from gyrocomp.commands import PLOT_LOCK
+    from gyrocomp import plots
+    from gyrocomp.classify import CLASSES_SCHEMA, classify
     from gyrocomp.config import settings_dict
     from gyrocomp.errors import InputError
 
@@ -110,6 +110,6 @@ def write(components: str | os.PathLike, settings, out: str | os.PathLike, *, pl
     result["components"] = entries
     artefacts.write_json(out, result)
     if plot is not None:
-        with PLOT_LOCK:
-            plot_entropies(entries, settings, plot)
+        stack = [(e["name"], frame[e["name"]].to_numpy(dtype=float), e["class"]) for e in entries]
+        plots.save(plots.classes_figure(frame["time"].to_numpy(dtype=float), stack, entries, settings), plot, dpi=110)
     return entries

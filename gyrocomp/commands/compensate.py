@@ -36,6 +36,7 @@ class Options:
 
     mode: str = "causal"
     clamp: Optional[bool] = None
+    plot: Optional[str | os.PathLike] = None
     seed: Optional[int] = None
     workers: int = 1
     columns: ColumnSpec = ColumnSpec()
@@ -106,6 +107,10 @@ def to_files(
         artefacts.write_table(out, table, {})
     else:
         write(Path(out), table, summaries, recording, Path(model_path), options.mode, options.seed)
+    if options.plot is not None:
+        from gyrocomp.commands.train import drift_plot
+
+        drift_plot(recording, pairs, options.plot, title=f"{recording.name} compensated ({options.mode})", compensated=compensated)
     return table, summaries, recording, list(caught)
 
 

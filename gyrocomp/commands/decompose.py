@@ -44,6 +44,7 @@ class Options:
     overrides: tuple = ()
     columns: ColumnSpec = ColumnSpec()
     resample: bool = False
+    plot: Optional[str | os.PathLike] = None
 
     def settings(self):
         """The :class:`~gyrocomp.decompose.DecomposeSettings`: the config's table, then ``--set``, then method and ensemble."""
@@ -82,7 +83,13 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
 
     (path,) = inputs
     recording = recordings.read_recording(path, options.columns, min_samples=4, resample=options.resample).axis()
-    return write(recording, options.settings(), out, seed=options.seed, workers=options.workers, progress=progress)
+    result, sidecar = write(recording, options.settings(), out, seed=options.seed, workers=options.workers, progress=progress)
+    if options.plot is not None:
+        from gyrocomp import plots
+
+        stack = [(name, values, None) for name, values in zip(result.names, result.components)]
+        plots.save(plots.components_figure(recording.time_s, stack), options.plot)
+    return result, sidecar
 
 
 def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers: int = 1, progress: Callable[[int, int], None] | None = None):

@@ -71,10 +71,10 @@ def to_files(
         The report as written.
     """
     from gyrocomp import artefacts, recordings
-    from gyrocomp.commands import PLOT_LOCK
+    from gyrocomp import plots
     from gyrocomp.config import settings_dict
     from gyrocomp.diagnose import diagnose, get_config, unexplained
-    from gyrocomp.diagnose.report import plot_gap, to_json, to_markdown
+    from gyrocomp.diagnose.report import to_json, to_markdown
 
     (fit,) = inputs
     settings = get_config(options.config)
@@ -113,7 +113,6 @@ def to_files(
             Path(tmp).write_text(text, encoding="utf-8")
     if options.plot is not None:
         plot = Path(options.plot)
-        with PLOT_LOCK:
-            for axis, verdict in verdicts.items():
-                plot_gap(verdict, plot if len(verdicts) == 1 else plot.with_name(f"{plot.stem}_{axis}{plot.suffix}"))
+        for axis, verdict in verdicts.items():
+            plots.save(plots.gap_figure(verdict), plot if len(verdicts) == 1 else plot.with_name(f"{plot.stem}_{axis}{plot.suffix}"), dpi=100)
     return report

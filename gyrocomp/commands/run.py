@@ -106,7 +106,6 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
     dict
         The report (also written as ``report.json``).
     """
-    from gyrocomp.commands import PLOT_LOCK
     from gyrocomp.commands.compensate import write as write_compensation
     from gyrocomp.pipeline import report
 
@@ -174,8 +173,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
     result["findings"] = report.findings(result)
     result["total_time_s"] = time.perf_counter() - started
     step("report", 0, 1)
-    with PLOT_LOCK:
-        report.write(out, result)
+    report.write(out, result)
     return result
 
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from typing import Sequence
+from pathlib import Path
+from typing import Optional, Sequence
 
 from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
@@ -31,6 +32,8 @@ class Options:
     columns : gyrocomp.recordings.ColumnSpec
         Column names and units of a direct pipeline's recording; several
         axes (``rate="gx,gy,gz"``) give one model each.
+    plot : path-like or None
+        PNG of :func:`gyrocomp.plots.drift_figure` on the training run, one row per axis.
     """
 
     config: str = "pe-lcd-anfis"
@@ -38,6 +41,7 @@ class Options:
     overrides: tuple = ()
     workers: int = 1
     columns: ColumnSpec = ColumnSpec()
+    plot: Optional[str | os.PathLike] = None
 
 
 def written(out, options) -> list:
@@ -98,7 +102,44 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         units = {axis.name: axis.unit for axis in recording.axes}
     model = model_file(trained, units)
     artefacts.write_json(out, model)
+    if options.plot is not None:
+        from gyrocomp.pipeline.compensate import load_models
+
+        if pipeline.parallel:
+            recording = recordings.recording_from_frame(frame[["time", "rate", "temperature"]], name=Path(source).name)
+        models = load_models(model, str(out))
+        pairs = {name: models.get(name, models.get(None)) for name in recording.axis_names}
+        drift_plot(recording, pairs, options.plot, title=f"{pipeline.kind} trained on {Path(source).name}")
     return model
+
+
+def drift_plot(recording, models: dict, path, *, title: str = "", compensated: dict | None = None) -> None:
+    """:func:`gyrocomp.plots.drift_figure` of a run, one row per axis, with the model of each axis.
+
+    Parameters
+    ----------
+    recording : gyrocomp.recordings.Recording
+    models : dict of str to DriftModel
+        By the recording's axis names.
+    compensated : dict of str to ndarray or None
+        Each axis compensated already; by default compensated here in causal mode.
+    """
+    import warnings
+
+    from gyrocomp import plots
+    from gyrocomp.pipeline.compensate import compensate
+
+    axes = []
+    for name, model in models.items():
+        one = recording.axis(name)
+        if compensated is None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the training run's own ranges; compensate reports leaving them, the plot need not
+                values = compensate(one, model, "causal")[0]["compensated"].to_numpy()
+        else:
+            values = compensated[name]
+        axes.append(plots.drift_axis(name, one.time_s, one.temperature_c, one.rate_dps, values, model))
+    plots.save(plots.drift_figure(axes, title=title), path)
 
 
 def train_axes(recording, config: dict, *, source: str, seed: int | None, workers: int = 1) -> dict:

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import os
 
-import numpy as np
 
-from gyrocomp.artefacts import artefact_header, atomic_path
+from gyrocomp.artefacts import artefact_header
 
-__all__ = ["to_json", "to_markdown", "summary_table", "plot_gap"]
+__all__ = ["to_json", "to_markdown", "summary_table"]
 
 
 def to_json(body: dict, *, inputs: list, settings: dict) -> dict:
@@ -142,42 +140,6 @@ def _limit(effect, candidate, selected):
     if not limit:
         return "beyond search range"
     return ", ".join(f"{k} >= {_fmt(v['value'])} {v['unit']}" for k, v in limit.items())
-
-
-def plot_gap(report: dict, path: str | os.PathLike) -> None:
-    """Residual RMS by regime and ADEV ratio by tau, baseline vs selected, written atomically as PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    runs = [r for r in ("fit", "holdout") if r in report["localization"]]
-    fig, axes = plt.subplots(len(runs), 2, figsize=(12, 4 * len(runs)), squeeze=False)
-    for row, run in zip(axes, runs):
-        loc = report["localization"][run]
-        regimes = list(loc["baseline"]["regime"])
-        x = np.arange(len(regimes))
-        for k, (model, color) in enumerate((("baseline", "tab:red"), ("selected", "tab:blue"))):
-            vals = [loc[model]["regime"].get(r, {}).get("rms_deg_h", np.nan) for r in regimes]
-            row[0].bar(x + (k - 0.5) * 0.4, vals, width=0.4, color=color, label=model)
-        noise = [loc["selected"]["regime"].get(r, {}).get("expected_rms_deg_h", np.nan) for r in regimes]
-        row[0].plot(x, noise, "k_", markersize=14, label="noise (selected model)")
-        row[0].set_xticks(x, regimes, rotation=45, ha="right", fontsize=8)
-        row[0].set_ylabel("residual 100 s RMS [deg/h]")
-        row[0].set_title(f"{run}: gap by regime")
-        row[0].legend(fontsize=8)
-        for model, color in (("baseline", "tab:red"), ("selected", "tab:blue")):
-            ts = loc[model]["timescale"]["adev"]
-            row[1].semilogx([p["tau_s"] for p in ts], [p["ratio"] for p in ts], "o-", color=color, label=model)
-        row[1].axhline(1.0, color="k", lw=0.8)
-        row[1].set_xlabel("tau [s]")
-        row[1].set_ylabel("ADEV residual / ADEV simulation")
-        row[1].set_title(f"{run}: gap by timescale (gap {_fmt(report['gap']['baseline'][run])} -> {_fmt(report['gap']['selected'][run])})")
-        row[1].legend(fontsize=8)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
-    plt.close(fig)
 
 
 def _fmt(v):

@@ -157,7 +157,7 @@ def c_header(plain: dict, vectors: dict | None = None, *, prefix: str = "gyrocom
         "    s->first = 0; s->head = 0; s->started = 0; s->temperature_rate = 0; s->drift = 0;",
         "}",
         "",
-        f"/* One sample: temperature [degC] and measured rate [deg/s] in, compensated rate [deg/s] out. */",
+        "/* One sample: temperature [degC] and measured rate [deg/s] in, compensated rate [deg/s] out. */",
         f"static inline {P}_real {P}_update({P}_state *s, {P}_real temperature_c, {P}_real rate_dps) {{",
         f"    {P}_real x, oldest, next[{U}_ORDER + 1], slope = 0, t, r, drift = 0;",
         "    int j, m;",
@@ -223,7 +223,7 @@ def _helpers(needs: set, P: str) -> list[str]:
     ]
     if "log" in needs:
         lines += [
-            f"/* natural logarithm of v > 0 without libm: v = m 2^k, m in [1, 2), log m = 2 atanh((m - 1) / (m + 1)) */",
+            "/* natural logarithm of v > 0 without libm: v = m 2^k, m in [1, 2), log m = 2 atanh((m - 1) / (m + 1)) */",
             f"static inline {P}_real {P}_log({P}_real v) {{",
             f"    {P}_real k = 0, s, s2, term, sum = 0; int n;",
             "    while (v >= 2) { v /= 2; k += 1; }",
@@ -235,11 +235,11 @@ def _helpers(needs: set, P: str) -> list[str]:
         ]
     if "sin" in needs:
         lines += [
-            f"/* sine without libm: reduce to [-pi, pi], Taylor series to degree 33 */",
+            "/* sine without libm: reduce to [-pi, pi], Taylor series to degree 33 */",
             f"static inline {P}_real {P}_sin({P}_real z) {{",
             f"    const {P}_real two_pi = ({P}_real)6.28318530717958647692;",
             f"    {P}_real turns = z / two_pi, term, sum, z2; long n; int k;",
-            f"    n = (long)(turns + (turns >= 0 ? 0.5 : -0.5));",
+            "    n = (long)(turns + (turns >= 0 ? 0.5 : -0.5));",
             "    z -= n * two_pi; z2 = z * z; term = z; sum = z;",
             "    for (k = 1; k <= 16; ++k) { term *= -z2 / ((2 * k) * (2 * k + 1)); sum += term; }",
             "    return sum;",

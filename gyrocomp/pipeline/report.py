@@ -14,7 +14,7 @@ from pathlib import Path
 
 from gyrocomp import artefacts
 
-__all__ = ["BASELINE", "findings", "write", "markdown", "plot"]
+__all__ = ["BASELINE", "findings", "write", "markdown", "method_label"]
 
 BASELINE = "polynomial"
 """The method every other one is compared with (DESIGN.md, "Honest evaluation")."""
@@ -31,7 +31,7 @@ def findings(report: dict) -> list[str]:
     for row in rows:
         if row["method"] == "raw":
             continue
-        label = _label(row)
+        label = method_label(row)
         drift, raw_drift = row["residual_drift"]["std_deg_h"], raw["residual_drift"]["std_deg_h"]
         out.append(
             f"{label}: residual drift (std of {row['residual_drift']['block_s']:g} s means) "
@@ -70,7 +70,9 @@ def write(folder: str | os.PathLike, report: dict) -> None:
     artefacts.write_json(folder / "report.json", report)
     with artefacts.atomic_path(folder / "report.md") as tmp:
         Path(tmp).write_text(markdown(report), encoding="utf-8")
-    plot(report, folder / "report.png")
+    from gyrocomp import plots
+
+    plots.save(plots.report_figure(report), folder / "report.png")
 
 
 def markdown(report: dict) -> str:
@@ -124,44 +126,7 @@ def markdown(report: dict) -> str:
     return "\n".join(lines)
 
 
-def plot(report: dict, path: str | os.PathLike) -> None:
-    """Allan deviation, 100 s means over time and signal survival, one panel each."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    fig, axes = plt.subplots(1, 3, figsize=(17, 5.2))
-    for row in report["rows"]:
-        label = _label(row)
-        style = {"color": "k", "lw": 2} if row["method"] == "raw" else {"lw": 1.2, "ls": "--" if row["mode"] == "causal" else "-"}
-        axes[0].loglog(row["allan"]["tau_s"], np.asarray(row["allan"]["adev"]) * 3600, label=label, **style)
-        means = np.asarray(row["means_dph"])
-        block = row["residual_drift"]["block_s"]
-        axes[1].plot((np.arange(means.size) + 0.5) * block / 3600, means, label=label, **style)
-    axes[0].set(xlabel="tau [s]", ylabel="Allan deviation [deg/h]", title="Allan deviation (test run)")
-    axes[1].set(xlabel="time [h]", ylabel="block mean [deg/h]", title="Residual drift: 100 s means")
-    axes[0].grid(True, which="both", alpha=0.3)
-    axes[1].grid(True, alpha=0.3)
-    axes[0].legend(fontsize=7)
-    kept = [r for r in report["rows"] if r.get("signal")]
-    parts = report["signal"]["parts"]
-    width = 0.8 / max(len(parts), 1)
-    x = np.arange(len(kept))
-    for i, part in enumerate(parts):
-        axes[2].bar(x + i * width, [100 * r["signal"]["parts"][part] for r in kept], width, label=part)
-    axes[2].axhline(100, color="k", lw=0.8)
-    axes[2].set_xticks(x + width * (len(parts) - 1) / 2, [_label(r) for r in kept], rotation=35, ha="right", fontsize=7)
-    axes[2].set(ylabel="signal kept [%]", title="Injected angular rate that survives")
-    axes[2].legend(fontsize=7)
-    fig.tight_layout()
-    with artefacts.atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
-    plt.close(fig)
-
-
-def _label(row: dict) -> str:
+def method_label(row: dict) -> str:
     return row["method"] if row["mode"] is None else f"{row['method']} ({row['mode']})"
 
 

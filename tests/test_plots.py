@@ -1,0 +1,117 @@
+"""Every figure of gyrocomp.plots is drawn here, from the sample data or a simulated run, and written as PNG."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from gyrocomp import plots
+from gyrocomp.cli import app
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLE = ROOT / "sample_data"
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def sample():
+    if not (SAMPLE / "oven_train.parquet").exists():
+        pytest.skip("sample_data absent")
+    return SAMPLE
+
+
+def test_no_global_matplotlib_state_in_the_library():
+    """Object API only: no ``matplotlib.use``, no ``pyplot``, no lock around drawing."""
+    for path in (ROOT / "gyrocomp").rglob("*.py"):
+        text = path.read_text()
+        assert "matplotlib.use(" not in text and "import matplotlib.pyplot" not in text and "import pyplot" not in text and "PLOT_LOCK" not in text, path
+
+
+def test_train_and_compensate_plot_bias_against_temperature_with_branches(sample, tmp_path):
+    runner = CliRunner()
+    model, train_png, comp_png = tmp_path / "m.json", tmp_path / "train.png", tmp_path / "comp.png"
+    result = runner.invoke(app, ["train", str(sample / "oven_train.parquet"), "--config", "polynomial", "--out", str(model), "--plot", str(train_png)])
+    assert result.exit_code == 0, result.output
+    result = runner.invoke(app, ["compensate", str(sample / "oven_test.parquet"), str(model), "--out", str(tmp_path / "c.parquet"), "--plot", str(comp_png)])
+    assert result.exit_code == 0, result.output
+    assert train_png.read_bytes()[:8] == PNG and comp_png.read_bytes()[:8] == PNG
+
+
+def test_drift_figure_content(sample):
+    from gyrocomp import recordings
+    from gyrocomp.config import load_config
+    from gyrocomp.pipeline.compensate import compensate, load_model
+    from gyrocomp.pipeline.train import train_direct
+
+    test = recordings.read_recording(sample / "oven_test.parquet", require_temperature=True).axis()
+    train = recordings.read_recording(sample / "oven_train.parquet", require_temperature=True).axis()
+    model = load_model(train_direct(train, load_config("polynomial"), source="p", seed=0))
+    frame, _ = compensate(test, model, "causal")
+    columns = [frame[c].to_numpy() for c in ("time", "temperature", "rate", "compensated")]
+    fig = plots.drift_figure([plots.drift_axis("gx", *columns, model), plots.drift_axis("gy", *columns, model)])
+    left, right = fig.axes[0], fig.axes[1]
+    labels = [line.get_label() for line in left.get_lines()]
+    assert any(label.startswith("heating") for label in labels) and any(label.startswith("cooling") for label in labels)
+    assert "model, dT/dt = 0" in labels
+    assert {line.get_label() for line in right.get_lines()} == {"raw", "compensated"}
+    assert any(ax.get_ylabel() == "temperature [degC]" for ax in fig.axes)  # the second axis
+    assert len(fig.axes) == 6  # two axes, three panels each (bias, rate, its temperature twin)
+    # the test run cools first: its cooling branch lies below its heating branch at the same temperature
+    heating = next(line for line in left.get_lines() if line.get_label().startswith("heating"))
+    cooling = next(line for line in left.get_lines() if line.get_label().startswith("cooling"))
+    at = lambda line: np.interp(0.0, *sorted_xy(line))  # noqa: E731
+    assert at(cooling) < at(heating)
+
+
+def sorted_xy(line):
+    x, y = line.get_xdata(), line.get_ydata()
+    order = np.argsort(x)
+    return x[order], y[order]
+
+
+def test_decompose_and_classify_plots(tmp_path, sample):
+    from gyrocomp import artefacts, recordings
+
+    rec = recordings.read_recording(sample / "oven_train.parquet", require_temperature=True).axis()
+    short = tmp_path / "short.parquet"
+    artefacts.write_table(short, rec.data.iloc[:3000], {})
+    runner = CliRunner()
+    comps, png = tmp_path / "c.parquet", tmp_path / "components.png"
+    result = runner.invoke(app, ["decompose", str(short), "--method", "emd", "--out", str(comps), "--plot", str(png)])
+    assert result.exit_code == 0, result.output
+    assert png.read_bytes()[:8] == PNG
+    classes_png = tmp_path / "classes.png"
+    result = runner.invoke(app, ["classify", str(comps), "--out", str(tmp_path / "classes.json"), "--plot", str(classes_png)])
+    assert result.exit_code == 0, result.output
+    assert classes_png.read_bytes()[:8] == PNG
+    frame, header = artefacts.read_table(comps, "gyrocomp.components")
+    entries = artefacts.read_json(tmp_path / "classes.json")["components"]
+    stack = [(e["name"], frame[e["name"]].to_numpy(), e["class"]) for e in entries]
+    fig = plots.components_figure(frame["time"].to_numpy(), stack)
+    assert [ax.get_ylabel() for ax in fig.axes] == [f"{e['name']}\n{e['class']}" for e in entries]
+
+
+def test_allan_figure_has_guides_readoffs_and_one_colour_per_series():
+    from gyrocomp.allan import analyse
+
+    rng = np.random.default_rng(3)
+    n = 200_000
+    walk = np.cumsum(rng.normal(0, 2e-5, n))
+    series = [analyse(rng.normal(0, 0.01, n) + k * walk, 1.0, name=f"g{axis}") for k, axis in enumerate("xyz")]
+    fig = plots.allan_figure(series)
+    ax = fig.axes[0]
+    guides = [line for line in ax.get_lines() if line.get_linestyle() == ":"]
+    assert len(guides) == 3
+    assert sorted(t.get_text() for t in ax.texts) == ["slope +0.5", "slope -0.5", "slope 0"]
+    curves = [line for line in ax.get_lines() if line.get_linestyle() == "-"]
+    assert len({line.get_color() for line in curves}) == 3
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert legend[0].startswith("gx: N ") and "B " in legend[0] and "K " in legend[0]
+    markers = {line.get_marker() for line in ax.get_lines()}
+    assert {"v", "o"} <= markers
+    # the N point sits on the read-off: sigma(1 s) = N / 60
+    n_point = next(line for line in ax.get_lines() if line.get_marker() == "v")
+    assert n_point.get_ydata()[0] == pytest.approx(series[0].terms["arw"]["readoff"] / 60)
