@@ -36,7 +36,13 @@ def trained(oven_pair):
 
 @pytest.mark.parametrize("key", list(LEARNERS))
 def test_held_out_drift_falls_tenfold_causal_and_fivefold_full(key, trained, oven_pair):
-    """Issue 8: causal compensation cuts residual drift >= 10x for each learned model, full >= 5x."""
+    """Issue 8: causal compensation cuts residual drift >= 10x for each learned model, full >= 5x.
+
+    One training seed here, with a margin measured over seeds 0-5 (issue #20): the
+    factors are 35-43 causal and 69-164 full for the seeded learners (ELM, BP,
+    NSGA-II-ELM), 38 / 88 for the polynomial and 40 / 81 for ANFIS (both
+    seed-free), so the bounds sit 3.5x below the worst seed.
+    """
     _, test, _, truth = oven_pair
     model = load_model(json.loads(json.dumps(trained[key])))
     raw = evaluate.residual_drift(test.rate_dps, test.fs_hz)["std_deg_h"]
