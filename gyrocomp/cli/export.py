@@ -42,10 +42,12 @@ def export(
     with report_errors(ctx):
         from gyrocomp.commands import export as stage, from_params
 
-        drift, summary = stage.to_files([model], out, from_params(stage.Options, ctx.params))
+        models, summary = stage.to_files([model], out, from_params(stage.Options, ctx.params))
     console = console_for(ctx, out)
     added = summary.get("added_error_deg_h")
     note = f"; the fitted cubic adds {added['rms']:.3g} deg/h RMS, {added['max']:.3g} deg/h at most over the training range" if added else ""
     if fmt == "px4" and device_id == 0:
         print("gyrocomp: warning: TC_G ID = 0; set --device-id to the gyro's CAL_GYRO<n>_ID, PX4 applies the slot to that sensor only", file=sys.stderr)
-    console.print(f"{out}: {drift.kind} model as {fmt}{note}", markup=False, highlight=False)
+    kinds = ", ".join(sorted({m.kind for m in models.values()}))
+    axes = "" if list(models) == [None] else f" ({len(models)} axes: {', '.join(map(str, models))})"
+    console.print(f"{out}: {kinds} model{axes} as {fmt}{note}", markup=False, highlight=False)

@@ -51,19 +51,23 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
 
     Returns
     -------
-    model : gyrocomp.pipeline.compensate.DriftModel
+    models : dict of str to gyrocomp.pipeline.compensate.DriftModel
+        By axis (``None`` for a version-1 model).
     summary : dict
         From :func:`gyrocomp.export.export_model`.
     """
     from gyrocomp import artefacts, recordings
     from gyrocomp.export import ExportOptions, export_model
-    from gyrocomp.pipeline.compensate import load_model
+    from gyrocomp.pipeline.compensate import load_models
 
     (model_path,) = inputs
-    drift = load_model(artefacts.read_json(model_path), str(model_path))  # load_model checks the header (model.json 1.x and 2.x)
+    drift = load_models(artefacts.read_json(model_path), str(model_path))  # checks the header (model.json 1.x and 2.x)
     recording = None
     if options.vectors is not None:
-        recording = recordings.read_recording(options.vectors, options.columns, require_temperature=True, min_samples=2).axis()
+        columns = options.columns
+        if columns.rate == "rate" and None not in drift:  # the model's own axis names, unless told otherwise
+            columns = dataclasses.replace(columns, rate=",".join(drift))
+        recording = recordings.read_recording(options.vectors, columns, require_temperature=True, min_samples=2)
     export_options = ExportOptions(
         options.fit_polynomial, options.axis.lower(), options.instance, options.device_id, recording, options.n_vectors, options.prefix
     )

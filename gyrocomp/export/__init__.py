@@ -65,7 +65,17 @@ class Format:
 
 
 def export_model(model, fmt: str, options: ExportOptions = ExportOptions()) -> tuple[str, dict]:
-    """Write a loaded model (:func:`gyrocomp.pipeline.load_model`) in `fmt`.
+    """Write a loaded model in `fmt`.
+
+    Parameters
+    ----------
+    model : DriftModel or dict of str to DriftModel
+        One model (:func:`gyrocomp.pipeline.load_model`), or one per axis
+        (:func:`gyrocomp.pipeline.compensate.load_models`). The firmwares'
+        axes x, y, z are the axes named so or ending so (``gx``, ``gyro_y``),
+        else the first three in order; a single model goes to ``options.axis``.
+        ``c`` writes one block of names per axis (prefix ``<prefix>_<axis>``),
+        ``json-plain`` one model per axis under ``axes``.
 
     Returns
     -------
@@ -81,7 +91,10 @@ def export_model(model, fmt: str, options: ExportOptions = ExportOptions()) -> t
     """
     if fmt not in FORMATS:
         raise InputError(f"--format {fmt!r}; choose {', '.join(FORMATS)}")
-    text, summary = FORMATS[fmt].write(model, options)
+    models = dict(model) if isinstance(model, dict) else {None: model}
+    if not models:
+        raise InputError("export: the model holds no axis")
+    text, summary = FORMATS[fmt].write(models, options)
     return text, {"format": fmt, **summary}
 
 
@@ -125,50 +138,88 @@ def reference_vectors(model, recording=None, n: int = 2048) -> dict:
     }
 
 
-def _cubics(model, options: ExportOptions, max_degree: int = 3) -> tuple[dict, dict]:
+def _firmware_axes(models: dict, options: ExportOptions) -> dict:
+    """Firmware axis letter of each model axis (see :func:`export_model`)."""
+    if len(models) == 1:
+        return {next(iter(models)): options.axis}
+    if len(models) > 3:
+        raise InputError(f"export: {len(models)} axes; a firmware gyro has x, y and z")
+    letters = {}
+    for index, name in enumerate(models):
+        low = str(name).lower()
+        letters[name] = low if low in "xyz" and len(low) == 1 else (low[-1] if low[-1:] in ("x", "y", "z") else None)
+    if None in letters.values() or len(set(letters.values())) != len(letters):
+        letters = {name: "xyz"[index] for index, name in enumerate(models)}
+    return letters
+
+
+def _cubics(models: dict, options: ExportOptions, max_degree: int = 3) -> tuple[dict, dict]:
     from gyrocomp.export.cubic import exact_cubic, nearest_cubic
 
-    if options.fit_polynomial:
-        try:
+    cubics, added = {}, {}
+    letters = _firmware_axes(models, options)
+    for name, model in models.items():
+        if options.fit_polynomial:
+            try:
+                cubic = exact_cubic(model, max_degree)
+            except InputError:
+                cubic = nearest_cubic(model, max_degree)
+        else:
             cubic = exact_cubic(model, max_degree)
-        except InputError:
-            cubic = nearest_cubic(model, max_degree)
-    else:
-        cubic = exact_cubic(model, max_degree)
-    summary = {"axis": options.axis}
-    if cubic.added_error_deg_h is not None:
-        summary["added_error_deg_h"] = cubic.added_error_deg_h
-    return {options.axis: cubic}, summary
+        cubics[letters[name]] = cubic
+        if cubic.added_error_deg_h is not None:
+            added[letters[name]] = cubic.added_error_deg_h
+    summary = {"axes": {letter: name for name, letter in letters.items()}}
+    if added:
+        summary["added_error_deg_h"] = {key: max(a[key] for a in added.values()) for key in ("rms", "max")}
+        summary["added_error_deg_h_by_axis"] = added
+    return cubics, summary
 
 
-def _px4(model, options: ExportOptions):
+def _source(models: dict) -> str:
+    return next(iter(models.values())).name.split(" axis ")[0]
+
+
+def _px4(models: dict, options: ExportOptions):
     from gyrocomp.export.firmware import px4_params
 
-    cubics, summary = _cubics(model, options)
+    cubics, summary = _cubics(models, options)
     instance = 0 if options.instance is None else options.instance
-    return px4_params(cubics, instance=instance, device_id=options.device_id, source=model.name), summary
+    return px4_params(cubics, instance=instance, device_id=options.device_id, source=_source(models)), summary
 
 
-def _ardupilot(model, options: ExportOptions):
+def _ardupilot(models: dict, options: ExportOptions):
     from gyrocomp.export.firmware import ardupilot_params
 
-    cubics, summary = _cubics(model, options)
+    cubics, summary = _cubics(models, options)
     instance = 1 if options.instance is None else options.instance
-    return ardupilot_params(cubics, instance=instance, source=model.name), summary
+    return ardupilot_params(cubics, instance=instance, source=_source(models)), summary
 
 
-def _c(model, options: ExportOptions):
+def _c(models: dict, options: ExportOptions):
     from gyrocomp.export.c import c_header
     from gyrocomp.export.plain import plain_model
 
-    vectors = reference_vectors(model, options.vectors, options.n_vectors)
-    return c_header(plain_model(model, centred=True), vectors, prefix=options.prefix), {"n_vectors": len(vectors["temperature_c"])}
+    blocks, counts = [], {}
+    for name, model in models.items():
+        recording = options.vectors
+        if recording is not None:
+            names = recording.axis_names
+            recording = recording.axis(name if name in names else names[0])
+        vectors = reference_vectors(model, recording, options.n_vectors)
+        prefix = options.prefix if len(models) == 1 else f"{options.prefix}_{name}"
+        blocks.append(c_header(plain_model(model, centred=True), vectors, prefix=prefix))
+        counts[str(name)] = len(vectors["temperature_c"])
+    return "\n".join(blocks), {"n_vectors": min(counts.values()), "prefixes": len(blocks)}
 
 
-def _json_plain(model, options: ExportOptions):
-    from gyrocomp.export.plain import plain_model
+def _json_plain(models: dict, options: ExportOptions):
+    from gyrocomp.export.plain import PLAIN_SCHEMA, plain_model
 
-    return json.dumps(plain_model(model), indent=1) + "\n", {}
+    if len(models) == 1:
+        return json.dumps(plain_model(next(iter(models.values()))), indent=1) + "\n", {}
+    body = {"schema": PLAIN_SCHEMA, "axes": {str(name): plain_model(model) for name, model in models.items()}}
+    return json.dumps(body, indent=1) + "\n", {}
 
 
 FORMATS = {

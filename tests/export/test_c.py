@@ -146,3 +146,17 @@ def test_per_sample_work_does_not_depend_on_the_window(models):
 
     assert update(c_header(plain)) == update(c_header(wide))
     assert update(c_header(plain)).count("GYROCOMP_WINDOW") == 1  # only the ring index wraps at the window; no loop runs over it
+
+
+@pytest.mark.skipif(CC is None, reason="no C compiler")
+def test_a_three_axis_header_has_one_block_per_axis(models, tmp_path):
+    """Three axes in one header: names prefixed per axis, each reproducing its own vectors."""
+    header, summary = export_model({"gx": models["polynomial"], "gy": models["elm"], "gz": models["anfis"]}, "c")
+    assert summary["prefixes"] == 3
+    program = PROGRAM.replace('#include "model.h"', '#include "model.h"').replace("gyrocomp_", "gyrocomp_gy_").replace("GYROCOMP_N_VECTORS", "GYROCOMP_GY_N_VECTORS")
+    (tmp_path / "model.h").write_text(header)
+    (tmp_path / "main.c").write_text(program)
+    exe = tmp_path / "check"
+    subprocess.run([CC, *FLAGS, "-o", str(exe), str(tmp_path / "main.c"), "-lm"], check=True, capture_output=True, text=True)
+    worst, _ = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split()
+    assert float(worst) < 1e-9

@@ -138,3 +138,33 @@ def test_fit_polynomial_is_exact_for_a_cubic_and_reports_its_error_for_a_network
         export_model(elm, "px4")
     _, summary = export_model(elm, "px4", ExportOptions(fit_polynomial=True))
     assert summary["added_error_deg_h"]["rms"] > 0
+
+
+def test_three_axis_model_exports_every_axis_to_its_firmware_axis(sample_train, tmp_path):
+    """A model.json with axes gx, gy, gz: PX4 axes 0, 1, 2 and ArduPilot X, Y, Z each equal that axis' causal compensation."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from gyrocomp.cli import app
+
+    frame = sample_train.data
+    three = pd.DataFrame({"time": frame["time"], "gx": frame["rate"], "gy": 0.01 - 0.5 * frame["rate"], "gz": 0.3 * frame["rate"], "temperature": frame["temperature"]})
+    rec, model, comp = tmp_path / "three.parquet", tmp_path / "three.json", tmp_path / "comp.parquet"
+    three.to_parquet(rec)
+    runner = CliRunner()
+    args = ["train", str(rec), "--config", "polynomial", "--set", "model.drift.rate_term=false", "--rate-col", "gx,gy,gz", "--out", str(model)]
+    assert runner.invoke(app, args).exit_code == 0
+    result = runner.invoke(app, ["compensate", str(rec), str(model), "--rate-col", "gx,gy,gz", "--out", str(comp)])
+    assert result.exit_code == 0, result.output
+    out = pd.read_parquet(comp)
+    for fmt, suffix in (("px4", "params"), ("ardupilot", "parm")):
+        path = tmp_path / f"three.{suffix}"
+        assert runner.invoke(app, ["export", str(model), "--format", fmt, "--out", str(path), "--device-id", "3"]).exit_code == 0
+        text = path.read_text()
+        for index, axis in enumerate(("gx", "gy", "gz")):
+            raw = out[axis].to_numpy() / DEG
+            if fmt == "px4":
+                got = px4_corrected(raw, out["temperature"].to_numpy(), _px4_table(text), axis=index) * DEG
+            else:
+                got = ardupilot_corrected(raw, out["temperature"].to_numpy(), _parm_table(text), axis="XYZ"[index]) * DEG
+            np.testing.assert_allclose(got, out[f"{axis}_compensated"], rtol=0, atol=1e-6)
