@@ -37,3 +37,11 @@ class ThresholdError(GyrocompError):
     """A figure crossed a CI threshold given on the command line; exit code 3."""
 
     exit_code = 3
+
+
+class RecordingNote(UserWarning):
+    """What reading a recording changed (duplicate stamps merged, gaps filled, segments found).
+
+    Not an error: the command line prints it as one line on stderr, and the
+    recording's ``inputs`` entry in every artefact keeps it.
+    """

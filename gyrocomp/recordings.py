@@ -17,7 +17,9 @@ gyro log (:class:`TimeLimits`); otherwise the message names the likely
 unit. Duplicate time stamps are refused unless merged (``dedupe``). A
 recording with gaps is a list of :attr:`Recording.segments`, never
 interpolated unless asked (``resample``), and then :attr:`Recording.notes`
-says what was filled.
+says what was filled; every note is also issued as a
+:class:`~gyrocomp.errors.RecordingNote` warning, which the command line
+prints.
 
 For a command that handles one axis, :meth:`Recording.axis` gives that axis
 as a one-axis recording whose column is ``rate``; :meth:`Recording.split`
@@ -34,13 +36,14 @@ import json
 import math
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Mapping, Sequence
 
 import numpy as np
 
 from gyrocomp.artefacts import file_sha256, parquet_header
-from gyrocomp.errors import InputError
+from gyrocomp.errors import InputError, RecordingNote
 
 if TYPE_CHECKING:  # pandas is imported where a function needs it: the Parquet path of a recording never does
     import pandas as pd
@@ -413,8 +416,11 @@ class Recording:
         return self.column("temperature")
 
     def input_record(self) -> dict:
-        """The ``inputs`` entry of an artefact header for this recording."""
-        return {"name": Path(self.name).name, "sha256": self.sha256}
+        """The ``inputs`` entry of an artefact header for this recording (with its :attr:`notes`, if any)."""
+        record = {"name": Path(self.name).name, "sha256": self.sha256}
+        if self.notes:
+            record["notes"] = list(self.notes)
+        return record
 
     def _like(self, arrays: dict, **changes) -> Recording:
         kwargs = dict(
@@ -591,6 +597,8 @@ def recording_from_frame(
         _check_time_base(out["time"], nominal, columns.time, name, limits)
     out, segments, filled = _segments(out, nominal, columns.time, locate, jitter_tolerance, resample, allow_gaps)
     notes.extend(filled)
+    for note in notes:
+        warnings.warn(f"{name}: {note}", RecordingNote, stacklevel=2)
     if sha256 is None:
         import pandas as pd
 

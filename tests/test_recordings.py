@@ -205,3 +205,25 @@ def test_lsm6dsm_bursts_read_as_segments_with_the_published_slopes():
     for axis, slope in expected.items():
         medians = np.array([np.median(p.column(axis)) for p in parts])
         assert np.polyfit(temps, medians, 1)[0] == pytest.approx(slope, abs=6e-4)
+
+
+def test_the_command_line_says_what_resample_filled(tmp_path):
+    """`--resample` is never silent: a note on stderr, and the note in the artefact's inputs."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from gyrocomp.cli import app
+
+    t = np.r_[np.arange(400) * 0.5, 400.0 + np.arange(400) * 0.5]
+    path = tmp_path / "gappy.csv"
+    pd.DataFrame({"time": t, "rate": np.random.default_rng(3).normal(0, 0.01, t.size)}).to_csv(path, index=False)
+    out = tmp_path / "allan.json"
+    refused = CliRunner().invoke(app, ["allan", str(path), "--out", str(out)])
+    assert refused.exit_code == 2 and "line 402: sampling interval 200.5 s" in refused.stderr
+    assert not out.exists()
+    result = CliRunner().invoke(app, ["allan", str(path), "--out", str(out), "--resample"])
+    assert result.exit_code == 0, result.output
+    note = "resampled onto a uniform 0.5 s grid: 1 gaps filled by linear interpolation, the longest 200.5 s"
+    assert f"gyrocomp: note: {path}: {note}" in result.stderr
+    assert json.loads(out.read_text())["inputs"][0]["notes"] == [note]

@@ -15,6 +15,7 @@ import signal
 import sys
 import time
 import traceback
+import warnings
 from pathlib import Path
 from typing import Annotated, Callable, Iterator, Optional
 
@@ -146,7 +147,8 @@ def report_errors(ctx: typer.Context) -> Iterator[None]:
     from gyrocomp.errors import GyrocompError
 
     try:
-        yield
+        with _print_notes():
+            yield
     except typer.Exit:
         raise
     except BrokenPipeError:
@@ -163,6 +165,25 @@ def report_errors(ctx: typer.Context) -> Iterator[None]:
             message = f"{type(err).__name__}: {message}"
         print(f"gyrocomp: {message}", file=sys.stderr)
         raise typer.Exit(code)
+
+
+@contextlib.contextmanager
+def _print_notes() -> Iterator[None]:
+    """Print each :class:`~gyrocomp.errors.RecordingNote` (what reading a recording changed) as one line on stderr."""
+    from gyrocomp.errors import RecordingNote
+
+    with warnings.catch_warnings():
+        show = warnings.showwarning
+
+        def print_note(message, category, *args, **kwargs):
+            if issubclass(category, RecordingNote):
+                print(f"gyrocomp: note: {message}", file=sys.stderr)
+            else:
+                show(message, category, *args, **kwargs)
+
+        warnings.simplefilter("always", RecordingNote)
+        warnings.showwarning = print_note
+        yield
 
 
 @contextlib.contextmanager
