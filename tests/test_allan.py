@@ -340,16 +340,18 @@ def test_streamed_lag1_equals_whole_array(d):
 
 
 def test_arw_readoff_only_below_the_allan_minimum():
-    """Issue 18: a smoothed (denoised) recording has no -1/2 line at short tau; the far -1/2 stretch is not ARW.
+    """Issue 18: a smoothed (denoised) recording has no -1/2 line at short tau; a far -1/2 stretch is not read as ARW.
 
-    A 2000-sample moving mean of white noise rises as tau^1 up to ~2000 s and
-    falls as tau^(-1/2) beyond: before the fix the read-off took that far
-    stretch and reported an ARW the recording does not have.
+    A 200-sample moving mean of white noise rises as tau^(+1/2) up to
+    ~200 s and falls as tau^(-1/2) beyond: before the fix the read-off took
+    the stretch from 512 to 16384 s and reported N = 0.59 deg/sqrt(h) at
+    tau = 1 s, where the curve is far below that line (on the sample test run
+    denoised by PE-LCD-ANFIS the same rule gave 19.9 against a fit of 0).
     """
     from gyrocomp.allan import analyse
 
     rng = np.random.default_rng(18)
-    smooth = np.convolve(rng.normal(0.0, 0.01, 400_000), np.ones(2000) / 2000, mode="valid")
+    smooth = np.convolve(rng.normal(0.0, 0.01, 200_000), np.ones(200) / 200, mode="valid")
     series = analyse(smooth, 1.0)
     arw = series.terms["arw"]
     assert arw["readoff"] is None
