@@ -84,7 +84,7 @@ def to_files(
         # A recording with gaps is diagnosed by segments (gyrocomp.diagnose.problems), never interpolated.
         return recordings.read_recording(
             path, options.columns, resample=options.resample, allow_gaps=not options.resample, min_samples=64
-        ).axis()
+        )
 
     fit_rec = read(fit)
     hold_rec = read(options.holdout) if options.holdout else None

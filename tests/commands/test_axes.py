@@ -255,3 +255,41 @@ def test_batch_passes_the_axes_and_reports_each(log3, tmp_path):
     assert result.exit_code == 0, row
     for axis in AXES:
         assert row[f"{axis}_compensated_drift_std_deg_h"] < 0.1 * row[f"{axis}_drift_std_deg_h"], axis
+
+
+def _two_axes(path, seed):
+    """5400 s at 1 Hz: `g1` the baseline (offset + linear in T + ARW 1 deg/sqrt(h)), `g2` the same plus a 1000 s sinusoid."""
+    from gyrocomp.sim import noise as sim_noise
+
+    rng = np.random.default_rng(seed)
+    t = np.arange(5400.0)
+    temp = 25.0 + 15.0 * np.sin(2 * np.pi * t / 3600.0)
+    base = 0.05 + 2e-3 * (temp - 25.0)
+    frame = pd.DataFrame({
+        "time": t,
+        "g1": base + sim_noise.white(t.size, 1.0, 1.0, rng),
+        "g2": base + 0.02 * np.sin(2 * np.pi * t / 1000.0 + 0.3) + sim_noise.white(t.size, 1.0, 1.0, rng),
+        "temperature": temp,
+    })
+    frame.to_csv(path, index=False)
+
+
+@pytest.mark.slow
+def test_diagnose_gives_a_verdict_per_axis_as_the_single_axis_runs(tmp_path):
+    fit, hold = tmp_path / "fit.csv", tmp_path / "hold.csv"
+    _two_axes(fit, 1)
+    _two_axes(hold, 2)
+    out = tmp_path / "report.json"
+    _invoke("diagnose", fit, "--holdout", hold, "--rate-col", "g1,g2", "--out", out, "--plot", tmp_path / "gap.png", "--markdown", tmp_path / "report.md")
+    report = json.loads(out.read_text())
+    assert list(report["axes"]) == ["g1", "g2"]
+    assert (tmp_path / "gap_g1.png").is_file() and (tmp_path / "gap_g2.png").is_file()
+    assert report["axes"]["g1"]["selected_effects"] == [] and "periodic" in report["axes"]["g2"]["selected_effects"]
+    for axis in ("g1", "g2"):
+        _invoke("diagnose", fit, "--holdout", hold, "--rate-col", axis, "--out", tmp_path / f"{axis}.json")
+        alone = json.loads((tmp_path / f"{axis}.json").read_text())
+        assert alone["axis"] == axis
+        assert report["axes"][axis]["selected_effects"] == alone["selected_effects"]
+        for model in ("baseline", "selected"):
+            for run in ("fit", "holdout"):
+                assert_allclose(report["axes"][axis]["gap"][model][run], alone["gap"][model][run], rtol=0, atol=1e-12)
