@@ -121,7 +121,6 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
     sidecar : dict
     """
     from gyrocomp import artefacts
-    from gyrocomp.config import settings_dict
     from gyrocomp.decompose import SIDECAR_SCHEMA, component_stats, decompose
 
     result = decompose(recording.rate_dps, settings, seed=seed, workers=workers, callback=progress)
