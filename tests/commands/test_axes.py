@@ -118,14 +118,17 @@ def test_compensate_names_an_axis_the_model_lacks(log3, tmp_path):
 
 
 def test_allan_draws_every_axis_in_one_plot(log3, tmp_path, monkeypatch):
-    import gyrocomp.allan
+    import gyrocomp.plots
 
     path, _ = log3
-    drawn = []
-    real = gyrocomp.allan.plot_allan
-    monkeypatch.setattr(gyrocomp.allan, "plot_allan", lambda series, out, **kw: (drawn.append([s.column for s in series]), real(series, out, **kw)))
+    figures = []
+    real = gyrocomp.plots.allan_figure
+    monkeypatch.setattr(gyrocomp.plots, "allan_figure", lambda series, **kw: figures.append(real(series, **kw)) or figures[-1])
     _invoke("allan", path, "--rate-col", "g*", "--temp-col", "temp", "--taus", "1,2,4,8", "--out", tmp_path / "allan.json", "--plot", tmp_path / "allan.png")
-    assert drawn == [list(AXES)] and (tmp_path / "allan.png").stat().st_size > 0
+    assert len(figures) == 1 and (tmp_path / "allan.png").stat().st_size > 0
+    legend = [t.get_text() for ax in figures[0].axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+    for axis in AXES:
+        assert sum(f"[{axis}]" in text for text in legend) == 1, (axis, legend)
     series = json.loads((tmp_path / "allan.json").read_text())["series"]
     assert [s["column"] for s in series] == list(AXES)
     for axis, s in zip(AXES, series):
