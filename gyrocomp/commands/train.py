@@ -108,7 +108,8 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         if pipeline.parallel:
             recording = recordings.recording_from_frame(frame[["time", "rate", "temperature"]], name=Path(source).name)
         models = load_models(model, str(out))
-        pairs = {name: models.get(name, models.get(None)) for name in recording.axis_names}
+        only = next(iter(models.values())) if len(models) == 1 else None  # one model: whatever its axis is called
+        pairs = {name: models.get(name, only) for name in recording.axis_names if models.get(name, only) is not None}
         drift_plot(recording, pairs, options.plot, title=f"{pipeline.kind} trained on {Path(source).name}")
     return model
 
