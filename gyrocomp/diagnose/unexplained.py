@@ -9,34 +9,35 @@ run by maximum likelihood), and whitened by the Cholesky factor ``L``:
 ``e = L^-1 (y - X beta)`` is ``N(0, I - P)`` when the model holds. Each
 test below is then exact (or conservative) with a known false-alarm rate:
 
-==================  ===========================================================  ==========================
-test                structure                                                     statistic under the model
-==================  ===========================================================  ==========================
-``temperature``     a function of temperature beyond the model's: indicators      score, ``chi^2_q``
-                    of ``temperature_bins`` equal-width temperature bins
-``heating_cooling`` different offset or slope in temperature when heating and     score, ``chi^2_q``
-                    when cooling (``|dT/dt|`` above ``soak_rate_c_per_min``)
-``power_on``        a settling after power-on: indicators of the windows          score, ``chi^2_q``
-                    ``poweron_edges_s``
-``time``            a drift in time: indicators of ``time_segments`` equal        score, ``chi^2_q``
-                    segments of the run
-``step``            a step at an unknown time (:func:`signature.step_scan`)       union bound over times
-``spectral_line``   a sinusoid at an unknown frequency (at least                  ``m (1 - g)^(m-1)`` [1]_
-                    ``line_min_cycles`` cycles in the run): Fisher's ``g`` of
-                    the periodogram of ``e``
-``noise_blocks``    a block-level noise that changes over the run: the            ``F_(k-1, n-k)`` [2]_
-                    Brown-Forsythe test of the spread of ``e`` in
-                    ``noise_segments`` segments
-``noise_samples``   a sample-level (white) noise that changes: the same test      ``F_(k-1, n-k)`` [2]_
-                    of the paired differences
-                    ``x_(2j+1) - x_(2j)`` within blocks (independent under white
-                    noise; every slow term cancels) in the same segments
-==================  ===========================================================  ==========================
+* ``temperature`` -- a function of temperature beyond the model's:
+  indicators of ``temperature_bins`` equal-width temperature bins; score,
+  ``chi^2_q``;
+* ``heating_cooling`` -- a different offset or slope in temperature when
+  heating and when cooling (``|dT/dt|`` above ``soak_rate_c_per_min``);
+  score, ``chi^2_q``;
+* ``power_on`` -- a settling after power-on: indicators of the windows
+  ``poweron_edges_s``; score, ``chi^2_q``;
+* ``time`` -- a drift in time: indicators of ``time_segments`` equal
+  segments of the run; score, ``chi^2_q``;
+* ``step`` -- a step at an unknown time
+  (:func:`gyrocomp.diagnose.signature.step_scan`); union bound over times;
+* ``spectral_line`` -- a sinusoid at an unknown frequency (at least
+  ``line_min_cycles`` cycles in the run): Fisher's ``g`` of the periodogram
+  of ``e``, ``P = m (1 - g)^(m-1)`` [1]_;
+* ``noise_blocks`` -- a block-level noise that changes over the run: the
+  Brown-Forsythe test of the spread of ``e`` in ``noise_segments``
+  segments, ``F_(k-1, n-k)`` [2]_;
+* ``noise_samples`` -- a sample-level (white) noise that changes: the same
+  test on the paired differences ``x_(2j+1) - x_(2j)`` within blocks
+  (independent under white noise; every slow term cancels), in the same
+  segments;
+* ``noise_temperature`` -- a white noise that depends on temperature: the
+  same pairs grouped by the temperature bins.
 
 The score statistic of whitened columns ``G`` is ``|U' e|^2`` with ``U`` an
 orthonormal basis of the part of ``L^-1 G`` orthogonal to ``L^-1 X``
-(:func:`gyrocomp.diagnose.signature.score_test`). The two noise tests also
-ask for a size: one segment's standard deviation differs from another's by
+(:func:`gyrocomp.diagnose.signature.score_test`). The three noise tests also
+ask for a size: one group's (robust) standard deviation differs from another's by
 the factor ``noise_min_ratio`` (at 100 Hz a change of 1 % is significant
 and of no consequence); this only lowers their false-alarm rate.
 
@@ -74,7 +75,7 @@ from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise
 from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins
 
-__all__ = ["UnexplainedSettings", "get_config", "verdict", "holm", "fisher_g", "variance_segments"]
+__all__ = ["UnexplainedSettings", "get_config", "verdict", "holm", "fisher_g", "variance_segments", "variance_groups"]
 
 _DEG_H = 3600.0
 """deg/h per deg/s."""
@@ -216,9 +217,22 @@ def variance_segments(x, n_segments):
         A robust standard deviation of each segment (``1.4826`` times the
         median absolute deviation from its median).
     """
-    parts = np.array_split(np.asarray(x, dtype=float), n_segments)
-    stat, p = stats.levene(*parts, center="median")
-    return float(stat), float(p), np.array([1.4826 * np.median(np.abs(q - np.median(q))) for q in parts])
+    x = np.asarray(x, dtype=float)
+    return variance_groups(np.array_split(x, n_segments))
+
+
+def variance_groups(groups):
+    """Brown-Forsythe test [2]_ that the arrays `groups` share one spread (see :func:`variance_segments`).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> stat, p, std = variance_groups([rng.standard_normal(5000), 2.0 * rng.standard_normal(5000)])
+    >>> bool(p < 1e-6), bool(1.8 < std[1] / std[0] < 2.2)
+    (True, True)
+    """
+    stat, p = stats.levene(*groups, center="median")
+    return float(stat), float(p), np.array([1.4826 * np.median(np.abs(q - np.median(q))) for q in groups])
 
 
 class _Prepared:
@@ -262,6 +276,17 @@ class _Prepared:
         pairs = ((x[:, 1:even:2] - x[:, 0:even:2]) / np.sqrt(2.0)).ravel()
         stat, p, std = variance_segments(pairs, s.noise_segments)
         self.tests["noise_samples"] = _noise_test(stat, p, std * np.sqrt(run.fs_hz), s)
+        if run.temperature_c is not None:
+            # The same pairs grouped by their block's temperature bin: a white noise that grows with temperature.
+            labels = np.repeat(np.argmax(self.columns["temperature"], axis=1), even // 2)
+            kinds = [k for k in np.unique(labels) if np.sum(labels == k) >= 2 * s.min_step_blocks]
+            if len(kinds) >= 2:
+                groups = [pairs[labels == k] for k in kinds]
+                stat, p, std = variance_groups(groups)
+                test = _noise_test(stat, p, std * np.sqrt(run.fs_hz), s)
+                cols = self.columns["temperature"][:, kinds]
+                test["temperature_c"] = [[float(self.temp[c > 0].min()), float(self.temp[c > 0].max())] for c in cols.T]
+                self.tests["noise_temperature"] = test
         self.duration_s = end
         self.kept = []
 
@@ -321,8 +346,7 @@ class _Prepared:
             e = self._innovations(self.structure(kept))[0]
             if _noise_test(*variance_segments(e, self.settings.noise_segments), self.settings)["p"] < alpha:
                 kept.append("noise_blocks")
-        if "noise_samples" in names:
-            kept.append("noise_samples")
+        kept += [k for k in ("noise_samples", "noise_temperature") if k in names]
         self.kept = kept
         return kept
 
@@ -358,6 +382,14 @@ class _Prepared:
     def describe(self, name):
         """Where the structure `name` lies and a sentence about its shape."""
         result = self.tests[name]
+        if name == "noise_temperature":
+            std = np.asarray(result["std"])
+            hi, lo = result["temperature_c"][int(np.argmax(std))], result["temperature_c"][int(np.argmin(std))]
+            return (
+                {"temperature_c": hi, "ratio": result["ratio"]},
+                f"the sample (white) noise depends on temperature: {result['ratio']:.2f} times larger at "
+                f"{hi[0]:.1f}-{hi[1]:.1f} degC than at {lo[0]:.1f}-{lo[1]:.1f} degC",
+            )
         if name.startswith("noise_"):
             std = np.asarray(result["std"])
             k_hi, k_lo = int(np.argmax(std)), int(np.argmin(std))

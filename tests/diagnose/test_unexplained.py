@@ -29,6 +29,9 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0):
     sigma = np.full(n, N)
     if kind == "noise_samples":
         sigma[n // 2 :] *= amp
+    temp = np.interp(t / 60.0, [0, 10, 35, 50, 80, 90, 105, 120], [25, 25, 50, 50, 20, 20, 35, 35])
+    if kind == "noise_temperature":
+        sigma *= 1.0 + (amp - 1.0) * (temp - 20.0) / 30.0
     x = sigma * rng.standard_normal(n) + 0.002 * ((temp - 35.0) / 15.0) ** 3
     if rrw:
         x += np.cumsum(rrw * rng.standard_normal(n))
@@ -81,6 +84,7 @@ def test_config_matches_defaults():
         ("spectral_line", 0.0006, ("spectral_line",), lambda w: w["timescale_s"] == pytest.approx(600.0, rel=0.05)),
         ("noise_blocks", 2.0, ("noise_blocks",), lambda w: w["time_s"][0] >= HOURS * 3600.0 / 2.0 - 1.0),
         ("noise_samples", 1.5, ("noise_samples",), lambda w: w["time_s"][0] >= HOURS * 3600.0 / 2.0 - 1.0),
+        ("noise_temperature", 2.0, ("noise_temperature", "noise_samples"), lambda w: w["test"] == "noise_samples" or w["temperature_c"][1] > 44.0),
     ],
 )
 def test_structure_is_flagged_and_located(kind, amp, named, check):
