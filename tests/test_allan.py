@@ -19,6 +19,9 @@ import pytest
 from numpy.testing import assert_allclose
 
 from gyrocomp import allan as al
+from gyrocomp.allan import deviation
+from gyrocomp.allan import noise_id as noise_id_module
+from gyrocomp.allan.deviation import Phase
 from gyrocomp.errors import InputError, ThresholdError
 
 
@@ -105,14 +108,14 @@ def test_edf_equals_allantools_greenhall(alpha, m):
     if alpha == 2 and (n_phase - 2 * m) / m <= 2:
         pytest.skip("allantools has no case 4.1")
     ref = allantools.ci.edf_greenhall(alpha=alpha, d=2, m=m, N=n_phase, overlapping=True, modified=False)
-    assert_allclose(al._edf_oadev(alpha, m, n_phase), ref, rtol=1e-9)
+    assert_allclose(noise_id_module.edf_oadev(alpha, m, n_phase), ref, rtol=1e-9)
 
 
 def test_noise_id_equals_allantools_lag1():
     y = _random_rate(20_000, seed=11)
-    phase = al._phase(y)
+    phase = Phase(deviation._phase(y))
     for m in (1, 2, 8, 64, 256):
-        assert al._noise_id(phase, m, 30) == allantools.ci.autocorr_noise_id(y, m, data_type="freq")[0]
+        assert noise_id_module.noise_id(phase, m, 30) == allantools.ci.autocorr_noise_id(y, m, data_type="freq")[0]
 
 
 def _adis(real_data, channel=0):
@@ -324,8 +327,8 @@ def test_allan_on_parquet_never_imports_pandas(tmp_path):
 def test_streamed_lag1_equals_whole_array(d):
     """Noise identification streams chunks; across chunk borders it equals the plain formula."""
     rng = np.random.default_rng(5)
-    y = rng.normal(size=4 * al._CHUNK + 12_345) + 1e-3 * np.cumsum(rng.normal(size=4 * al._CHUNK + 12_345))
-    phase = al._phase(y)
+    y = rng.normal(size=4 * deviation._CHUNK + 12_345) + 1e-3 * np.cumsum(rng.normal(size=4 * deviation._CHUNK + 12_345))
+    phase = deviation._phase(y)
     z = np.diff(phase)
     t = np.arange(len(z), dtype=float)
     z = z - np.polyval(np.polyfit(t, z, 1), t)
@@ -336,7 +339,7 @@ def test_streamed_lag1_equals_whole_array(d):
     center = (n - 1) / 2.0
     mean = phase[-1] / n
     slope = np.dot(np.arange(n) - center, np.diff(phase)) / (n * (n * n - 1.0) / 12.0)
-    assert_allclose(al._lag1_delta(phase, 1, n, mean, slope, center, d), r1 / (1.0 + r1), rtol=1e-9)
+    assert_allclose(noise_id_module._lag1_delta(Phase(phase), 1, n, mean, slope, center, d), r1 / (1.0 + r1), rtol=1e-9)
 
 
 def test_arw_readoff_only_below_the_allan_minimum():
@@ -359,3 +362,37 @@ def test_arw_readoff_only_below_the_allan_minimum():
     # white noise keeps its read-off, on the short-tau line
     white = analyse(rng.normal(0.0, 0.01, 100_000), 1.0).terms["arw"]
     assert white["readoff"] == pytest.approx(0.01 * 60, rel=0.05) and white["readoff_tau_s"][0] == 1.0
+
+
+@pytest.mark.parametrize("in_memory", [True, False])
+def test_chunked_analysis_equals_the_whole_array(in_memory):
+    """analyse_chunks (phase in memory, or spilled to a file and read back by windows) against analyse, to 1e-12.
+
+    300 000 samples: taus up to m = 2^17, past the 2^16 chunk of the second-difference sums.
+    """
+    import dataclasses
+
+    rng = np.random.default_rng(19)
+    y = 0.1 + rng.normal(0.0, 0.01, 300_000) + 1e-4 * np.cumsum(rng.normal(size=300_000))
+    settings = dataclasses.replace(al.AllanConfig(), max_phase_in_memory=10**9 if in_memory else 0)
+    cuts = [0, 1, 70_001, 70_002, 199_999, 300_000]
+    chunked = al.analyse_chunks(lambda: (y[a:b] for a, b in zip(cuts, cuts[1:])), 100.0, settings=settings)
+    whole = al.analyse(y, 100.0, settings=settings)
+    assert chunked.tau_s.max() > deviation._CHUNK / 100.0
+    assert_allclose(chunked.adev, whole.adev, rtol=1e-12)
+    assert_allclose(chunked.edf, whole.edf, rtol=1e-12)
+    assert list(chunked.alpha) == list(whole.alpha)
+    for key, term in whole.terms.items():
+        assert chunked.terms[key]["value"] == pytest.approx(term["value"], rel=1e-9, abs=1e-15)
+
+
+def test_ieee952_model_reads_its_own_terms():
+    """Each term alone gives its IEEE Std 952 line: N at 1 s, 0.664 B on the flat, K at 3 s ([4]_ Table C.1)."""
+    from gyrocomp.allan import ieee952
+
+    n = ieee952.from_datasheet("arw", 0.5)
+    assert np.sqrt(ieee952.avar(1.0, arw=n)) * 60.0 == pytest.approx(0.5)
+    b = ieee952.from_datasheet("bias_instability", 3.0)
+    assert np.sqrt(ieee952.avar([10.0, 1000.0], bias_instability=b)) / b == pytest.approx([0.6643, 0.6643], abs=1e-4)
+    k = ieee952.from_datasheet("rrw", 2.0)
+    assert ieee952.to_datasheet("rrw", np.sqrt(ieee952.avar(3.0, rrw=k))) == pytest.approx(2.0)

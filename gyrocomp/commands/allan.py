@@ -59,6 +59,10 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     Each recording is read (:func:`gyrocomp.recordings.read_recording`),
     each of its axes (or ``options.column``) analysed
     (:func:`gyrocomp.allan.analyse`) as one series named after the file,
+    or, for a CSV or Parquet file, read chunk by chunk, twice per series
+    (:func:`gyrocomp.streaming.read_chunks`, :func:`gyrocomp.allan.analyse_chunks`),
+    so that a recording bigger than memory is fine (standard input, flight
+    logs, time units other than seconds and `resample` read it whole);
     its ``column`` the axis' name, and every series written to `out` (``-``
     is stdout) as :func:`gyrocomp.allan.allan_artefact` and drawn in one
     plot. The bounds are left to :func:`check`, so that the artefacts exist
@@ -77,7 +81,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     list of gyrocomp.allan.AllanSeries
     """
     from gyrocomp import allan as al
-    from gyrocomp import artefacts, recordings
+    from gyrocomp import artefacts, recordings, streaming
     from gyrocomp.config import settings_dict
     from gyrocomp.errors import InputError
 
@@ -85,6 +89,26 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     column = options.column
     series, records, units = [], [], []
     for path in inputs:
+        usecols = [] if column == "rate" else [column]
+        if str(path) != "-" and not options.resample and streaming.supports(path, options.columns):
+            reader = streaming.read_chunks(path, options.columns, usecols=usecols)
+            head = next(iter(reader))  # the axes and columns, from the first chunk
+            if column == "rate":
+                values = {axis.name: ((lambda chunk, name=axis.name: chunk.axis(name).rate_dps), axis.unit) for axis in head.axes}
+            elif column in head.columns:
+                values = {column: ((lambda chunk: chunk.column(column)), "deg/s")}
+            else:
+                raise InputError(f"{head.name}: no column {column!r} to analyse; it has {', '.join(head.columns)}")
+            for name, (pick, unit) in values.items():
+                one = al.analyse_chunks(
+                    lambda: (pick(chunk) for chunk in reader), lambda: reader.fs_hz,
+                    taus=options.taus, name=Path(reader.name).name, column=name, settings=settings,
+                )
+                _relabel(one, unit)
+                series.append(one)
+                units.append(unit)
+            records.append(reader.input_record())
+            continue
         rec = recordings.read_recording(path, options.columns, min_samples=3, resample=options.resample, usecols=[] if column == "rate" else [column])
         if column == "rate":
             values = {axis.name: (rec.axis(axis.name).rate_dps, axis.unit) for axis in rec.axes}
@@ -123,7 +147,7 @@ def _relabel(series, unit: str) -> None:
     """Give the terms of an axis in `unit` (an acceleration) their units, in place.
 
     The terms are computed for deg/s with factors that only turn seconds
-    into hours (:data:`gyrocomp.allan` ``_TERMS``), so for an axis in m/s^2
+    into hours (:data:`gyrocomp.allan.ieee952.FACTORS`), so for an axis in m/s^2
     the same values hold with ``m/s`` in place of ``deg``: velocity random
     walk [m/s/sqrt(h)], bias instability [m/s/h], acceleration random walk
     [m/s/h/sqrt(h)] (IEEE Std 1293, Annex C).

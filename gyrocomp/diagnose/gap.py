@@ -68,7 +68,8 @@ import numpy as np
 from scipy import linalg, special, stats
 
 from gyrocomp import allan
-from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means
+from gyrocomp.allan.ieee952 import FLICKER_AVAR
+from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means
 
 __all__ = ["gap", "barnes_b1", "noise_level", "log_chi2_moment", "effective_dof"]
 

@@ -46,10 +46,11 @@ import dataclasses
 import numpy as np
 from scipy import linalg, optimize
 
+from gyrocomp.allan import ieee952
+from gyrocomp.allan.ieee952 import FLICKER_AVAR
+
 __all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "profile_deviance", "fit_noise", "fit_noise_runs"]
 
-FLICKER_AVAR = 2.0 * np.log(2.0) / np.pi
-"""Allan variance of flicker noise per unit ``B^2`` (IEEE Std 952: 0.6643^2)."""
 
 _LN_FLOOR = -60.0
 """Lower bound of a fitted log-variance: ``exp(-60)`` is numerically zero."""
@@ -92,9 +93,9 @@ class NoiseModel:
     def datasheet_units(self) -> dict:
         """The terms in the units datasheets (and :mod:`gyrocomp.sim`) quote."""
         return {
-            "arw": {"value": self.arw * 60.0, "unit": "deg/sqrt(h)"},
-            "bias_instability": {"value": self.bias_instability * 3600.0, "unit": "deg/h"},
-            "rate_random_walk": {"value": self.rate_random_walk * 3600.0 * 60.0, "unit": "deg/h/sqrt(h)"},
+            "arw": {"value": ieee952.to_datasheet("arw", self.arw), "unit": ieee952.UNITS["arw"]},
+            "bias_instability": {"value": ieee952.to_datasheet("bias_instability", self.bias_instability), "unit": ieee952.UNITS["bias_instability"]},
+            "rate_random_walk": {"value": ieee952.to_datasheet("rrw", self.rate_random_walk), "unit": ieee952.UNITS["rrw"]},
         }
 
 

@@ -24,6 +24,9 @@ import numpy as np
 
 from gyrocomp.errors import GyrocompError, InputError
 
+PREDICT_ROWS = 1 << 16
+"""Rows evaluated at once by :meth:`Learner.predict` (ANFIS with 25 rules: 13 MB of firing strengths)."""
+
 FORMAT_VERSION = 1
 """Version of the ``to_dict`` layout; :meth:`Learner.from_dict` refuses newer ones."""
 
@@ -85,6 +88,20 @@ class Learner(abc.ABC):
             raise NotFittedError(
                 f"this {type(self).__name__} is not fitted yet; call fit(X, y) first"
             )
+
+    def predict(self, X: Any) -> np.ndarray:
+        """The model's output for each row of `X`, shape (n_samples,), in the unit of y.
+
+        Rows are independent: the subclass's ``_forward`` runs on
+        `PREDICT_ROWS` of them at a time, so its temporaries (hidden
+        layers, rule firing strengths) stay of bounded size whatever the
+        length of `X`.
+        """
+        X = self._predict_input(X)
+        out = np.empty(len(X))
+        for start in range(0, len(X), PREDICT_ROWS):
+            out[start : start + PREDICT_ROWS] = self._forward(X[start : start + PREDICT_ROWS])
+        return out
 
     def _predict_input(self, X: Any) -> np.ndarray:
         """Refuse an unfitted model, then `X` as at fit (see :func:`check_X`)."""

@@ -258,9 +258,8 @@ class ANFIS(Learner):
         self.best_epoch_ = best[1]
         return self
 
-    def predict(self, X: Any) -> np.ndarray:
-        """Model output for each row of `X`, shape (n_samples,), in the unit of y."""
-        X = self._predict_input(X)
+    def _forward(self, X: np.ndarray) -> np.ndarray:
+        """Model output for each row of `X`, in the unit of y."""
         Z = (X - self.input_offset_) / self.input_scale_
         return _predict(Z, self.premises_, self.consequents_, self.mf)
 

@@ -149,9 +149,8 @@ class BPNetwork(Learner):
         self.n_features_in_ = X.shape[1]
         return self
 
-    def predict(self, X: Any) -> np.ndarray:
-        """Forward pass, shape (n_samples,), in the unit of y."""
-        X = self._predict_input(X)
+    def _forward(self, X: np.ndarray) -> np.ndarray:
+        """Forward pass, in the unit of y."""
         g = _hidden_activation(self.activation)
         a = (X - self.x_mean_) / self.x_scale_
         for w, b in zip(self.coefs_[:-1], self.intercepts_[:-1]):

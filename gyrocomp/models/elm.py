@@ -149,9 +149,8 @@ class ELM(Learner):
         self.n_features_in_ = X.shape[1]
         return self
 
-    def predict(self, X: Any) -> np.ndarray:
-        """H(X) beta, shape (n_samples,), in the unit of y."""
-        X = self._predict_input(X)
+    def _forward(self, X: np.ndarray) -> np.ndarray:
+        """H(X) beta, in the unit of y."""
         return self._hidden(X) @ self.beta_
 
     @property

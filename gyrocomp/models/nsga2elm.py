@@ -220,10 +220,9 @@ class NSGA2ELM(Learner):
         self.n_features_in_ = X.shape[1]
         return self
 
-    def predict(self, X: Any) -> np.ndarray:
-        """The picked ELM's output, shape (n_samples,), in the unit of y."""
-        X = self._predict_input(X)
-        return self.estimator_.predict(X)
+    def _forward(self, X: np.ndarray) -> np.ndarray:
+        """The picked ELM's output, in the unit of y."""
+        return self.estimator_._forward(X)
 
     def _check_params(self) -> None:
         owner = "NSGA2ELM"

@@ -97,9 +97,8 @@ class PolynomialDrift(Learner):
         self.n_features_in_ = X.shape[1]
         return self
 
-    def predict(self, X: Any) -> np.ndarray:
-        """Bias for each row of `X` (Horner's rule), shape (n_samples,)."""
-        X = self._predict_input(X)
+    def _forward(self, X: np.ndarray) -> np.ndarray:
+        """Bias for each row of `X` (Horner's rule)."""
         dt = X[:, 0] - self.reference_temperature
         out = np.full(len(X), self.coef_[-1])
         for c in self.coef_[-2::-1]:

@@ -18,13 +18,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from gyrocomp.allan.ieee952 import DPS_TO_DPH
 from gyrocomp.errors import InputError
 from gyrocomp.pipeline.settings import EvaluateSettings, SignalSettings
 
 __all__ = ["block_means", "residual_drift", "injected_signal", "signal_preservation", "allan_terms"]
 
-DPS_TO_DPH = 3600.0
-"""deg/s to deg/h."""
 
 
 def block_means(x, fs_hz: float, block_s: float = 100.0) -> np.ndarray:

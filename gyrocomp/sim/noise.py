@@ -21,22 +21,19 @@ from __future__ import annotations
 import numpy as np
 from scipy import fft as sp_fft
 
+from gyrocomp.allan.ieee952 import DPS_TO_DPH, SQRT_S_PER_SQRT_H
 from gyrocomp.errors import InputError
 
 __all__ = ["white", "flicker", "random_walk", "arw_to_dps_sqrt_s", "rrw_to_dps_per_sqrt_s"]
 
-_SQRT_H = 60.0
-"""sqrt(3600 s): deg/sqrt(h) -> deg/sqrt(s) divides by this."""
-
-
 def arw_to_dps_sqrt_s(arw):
     """Angle random walk from deg/sqrt(h) to deg/s/sqrt(Hz) (= deg/sqrt(s))."""
-    return arw / _SQRT_H
+    return arw / SQRT_S_PER_SQRT_H
 
 
 def rrw_to_dps_per_sqrt_s(rrw):
     """Rate random walk from deg/h/sqrt(h) to deg/s/sqrt(s)."""
-    return rrw / (3600.0 * _SQRT_H)
+    return rrw / (DPS_TO_DPH * SQRT_S_PER_SQRT_H)
 
 
 def white(n, fs_hz, arw, rng):
@@ -96,7 +93,7 @@ def flicker(n, fs_hz, bias_instability, rng):
     _check(n, fs_hz, bias_instability, "bias_instability")
     if n < 2:
         return np.zeros(n)
-    b_dps = bias_instability / 3600.0
+    b_dps = bias_instability / DPS_TO_DPH
     m = sp_fft.next_fast_len(n, real=True)
     f = np.fft.rfftfreq(m, d=1.0 / fs_hz)
     amplitude = np.zeros_like(f)

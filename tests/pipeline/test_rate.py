@@ -7,7 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from gyrocomp.errors import InputError
-from gyrocomp.pipeline.rate import causal_coefficients, describe, model_inputs, temperature_rate, window_samples
+from gyrocomp.pipeline.rate import CausalRate, causal_coefficients, describe, model_inputs, temperature_rate, window_samples
 from gyrocomp.pipeline.settings import RateSettings
 
 
@@ -87,3 +87,74 @@ def test_bad_settings_are_refused():
         RateSettings(window_s=0.0)
     with pytest.raises(InputError):
         RateSettings(method="diff")
+
+
+def _oven_like(n, fs, seed):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / fs
+    return 25 + 10 * np.sin(t / 3000) + np.round(rng.normal(0, 0.05, n) * 16) / 16
+
+
+@pytest.mark.parametrize("fs", [1.0, 100.0])
+def test_causal_equals_the_stored_fir_to_1e_12(fs):
+    """The FIR with the closed-form line-slope taps A (k - kbar), A = 12 fs / (W (W^2 - 1)), in extended precision."""
+    temperature = _oven_like(12_000, fs, 3)
+    settings = RateSettings()
+    n = window_samples(settings, fs)
+    k = np.arange(n, dtype=np.longdouble)
+    taps = 12 * np.longdouble(fs) / (n * (np.longdouble(n) ** 2 - 1)) * (k - (n - 1) / 2)
+    assert_allclose(causal_coefficients(settings, fs), taps.astype(float), rtol=1e-12, atol=1e-15 * float(np.abs(taps).max()))
+    primed = np.concatenate([np.full(n - 1, temperature[0]), temperature]).astype(np.longdouble)
+    reference = np.convolve(primed, taps[::-1], mode="valid").astype(float)
+    rate = temperature_rate(temperature, fs, settings, causal=True)
+    assert np.max(np.abs(rate - reference)) <= 1e-12 * np.max(np.abs(reference))
+
+
+@pytest.mark.parametrize("order", [2, 3, 4])
+def test_higher_orders_equal_savgol(order):
+    """Centred against scipy's savgol_filter; causal against a trailing numpy.polyfit."""
+    from scipy.signal import savgol_filter
+
+    temperature = _oven_like(3000, 10.0, order)
+    settings = RateSettings(window_s=20.0, polyorder=order)
+    n = window_samples(settings, 10.0)
+    reference = savgol_filter(temperature, n, order, deriv=1, delta=0.1, mode="interp")
+    assert_allclose(temperature_rate(temperature, 10.0, settings), reference, rtol=0, atol=1e-10 * np.abs(reference).max())
+    causal = temperature_rate(temperature, 10.0, settings, causal=True)
+    x = np.arange(n) / 10.0
+    for i in (n - 1, 1500, 2999):
+        fit = np.polyfit(x - x[-1], temperature[i - n + 1 : i + 1], order)
+        assert_allclose(causal[i], fit[-2], rtol=1e-8)
+
+
+def test_a_stream_in_chunks_equals_the_whole_series():
+    temperature = _oven_like(5000, 10.0, 4)
+    settings = RateSettings(window_s=30.0)
+    whole = temperature_rate(temperature, 10.0, settings, causal=True)
+    estimator = CausalRate(settings, 10.0)
+    parts = [estimator(temperature[a:b]) for a, b in ((0, 1), (1, 250), (250, 251), (251, 4000), (4000, 5000))]
+    assert_allclose(np.concatenate(parts), whole, rtol=0, atol=1e-14 * np.abs(whole).max())
+
+
+def test_the_documented_per_sample_recursion_gives_the_same_rate():
+    """The firmware form of the module notes (ring buffer, N and S, fresh sums every W samples), sample by sample."""
+    temperature = _oven_like(4000, 1.0, 5)
+    settings = RateSettings(window_s=61.0)
+    d = describe(settings, 1.0)
+    n, kbar, gain = d["window_samples"], d["recursion"]["kbar"], d["recursion"]["slope_gain"]
+    ring = np.zeros(n)  # temperatures minus the first reading: the priming reading is 0
+    big_n = big_s = fresh_n = fresh_s = 0.0
+    out = np.empty(temperature.size)
+    for t, value in enumerate(temperature - temperature[0]):
+        oldest = ring[t % n]
+        big_n += -big_s + kbar * value + (kbar + 1) * oldest
+        big_s += value - oldest
+        ring[t % n] = value
+        k = t % n
+        fresh_n += (k - kbar) * value
+        fresh_s += value
+        if k == n - 1:
+            big_n, big_s, fresh_n, fresh_s = fresh_n, fresh_s, 0.0, 0.0
+        out[t] = gain * big_n
+    rate = temperature_rate(temperature, 1.0, settings, causal=True)
+    assert_allclose(out, rate, rtol=0, atol=1e-12 * np.abs(rate).max())

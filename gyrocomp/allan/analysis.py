@@ -1,0 +1,324 @@
+"""The Allan analysis of a recording: deviation, confidence, IEEE Std 952 terms, artefact.
+
+:func:`analyse` puts the pieces together for a series in memory, and
+:func:`analyse_chunks` for one read chunk by chunk, as long as the disk
+holds it: the overlapping deviation (:mod:`gyrocomp.allan.deviation`), the
+noise identification and chi-square interval
+(:mod:`gyrocomp.allan.noise_id`) and the five-term fit with the classic
+read-offs (:mod:`gyrocomp.allan.fit`, model in
+:mod:`gyrocomp.allan.ieee952`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from typing import Callable, Iterable, Sequence
+
+import numpy as np
+
+from gyrocomp.allan.deviation import Phase, _phase, averaging_factors, check_fs, integrate, second_difference_sums
+from gyrocomp.allan.fit import add_readoffs, fit_terms
+from gyrocomp.allan.noise_id import chi2_interval, edf_oadev, noise_id
+from gyrocomp.errors import InputError, ThresholdError
+
+__all__ = [
+    "AllanConfig",
+    "AllanSeries",
+    "get_config",
+    "analyse",
+    "analyse_chunks",
+    "allan_artefact",
+    "check_thresholds",
+]
+
+
+@dataclasses.dataclass(frozen=True)
+class AllanConfig:
+    """Settings of the Allan analysis; defaults equal ``configs/allan.toml``.
+
+    Attributes
+    ----------
+    taus : str
+        ``"octave"``, ``"decade"``, ``"all"`` or a comma-separated list of tau [s].
+    confidence : float
+        Two-sided confidence level of ``adev_lo``/``adev_hi`` (0.683 = 1 sigma).
+    min_acf_points : int
+        Fewest m-averages for the lag-1 ACF noise identification [2]_; below
+        it the B1 ratio ([1]_ sec. 5.6) decides.
+    model_error : float
+        Relative error of the five-term model itself in the Allan variance,
+        added in quadrature to the statistical error sqrt(2/edf) in the fit
+        weights.
+    identify_sigmas : float
+        A fitted term is *identified* when its Allan-variance coefficient
+        exceeds this many standard errors.
+    arw_tau_s, rrw_tau_s : float
+        Where the -1/2 and +1/2 lines are read ([4]_: 1 s and 3 s).
+    slope_tolerance : float
+        Largest deviation of a local log-log slope from -1/2 (+1/2) for a
+        segment to count as the ARW (RRW) line of a read-off.
+    bias_factor : float
+        sigma_min / B for flicker rate noise, sqrt(2 ln2/pi) ~ 0.664 ([4]_).
+    max_phase_in_memory : int
+        Longest series [samples] whose phase :func:`analyse_chunks` keeps
+        in memory (8 bytes a sample); a longer one is spilled to a file.
+    """
+
+    taus: str = "octave"
+    confidence: float = 0.683
+    min_acf_points: int = 30
+    model_error: float = 0.1
+    identify_sigmas: float = 2.0
+    arw_tau_s: float = 1.0
+    rrw_tau_s: float = 3.0
+    slope_tolerance: float = 0.1
+    bias_factor: float = 0.664
+    max_phase_in_memory: int = 20_000_000
+
+    def __post_init__(self):
+        if not 0.0 < self.confidence < 1.0:
+            raise InputError(f"allan confidence = {self.confidence!r}; must be in (0, 1)")
+        if self.min_acf_points < 3:
+            raise InputError(f"allan min_acf_points = {self.min_acf_points!r}; must be >= 3")
+        if self.max_phase_in_memory < 0:
+            raise InputError(f"allan max_phase_in_memory = {self.max_phase_in_memory!r}; must be >= 0")
+
+
+def get_config(path: str | os.PathLike = "allan") -> AllanConfig:
+    """Read the ``[allan]`` table of a TOML config (default ``configs/allan.toml``)."""
+    from gyrocomp.config import bind, check_tables, load_config
+
+    return bind(AllanConfig, check_tables(load_config(path), ("allan",), str(path)).get("allan"), f"{path} [allan]")
+
+
+@dataclasses.dataclass
+class AllanSeries:
+    """Allan deviation of one series, its confidence interval and noise terms.
+
+    Attributes
+    ----------
+    name, column : str
+        Where the series came from.
+    fs_hz : float
+        Sample rate.
+    tau_s, adev, adev_lo, adev_hi : ndarray
+        Averaging times [s], overlapping Allan deviation and its two-sided
+        chi-square interval at `confidence` [unit of the input, deg/s for rate].
+    n : ndarray of int
+        Second differences averaged at each tau (N - 2m + 1).
+    alpha : ndarray of int
+        Identified power-law exponent of the rate PSD, S(f) ~ f^alpha
+        (2 white PM/quantization, 0 white rate, -1 flicker, -2 random walk).
+    edf : ndarray
+        Equivalent degrees of freedom [3]_.
+    confidence : float
+        Level of the interval.
+    terms : dict
+        ``quantization``, ``arw``, ``bias_instability``, ``rrw``,
+        ``rate_ramp``; each ``{value, unit, sigma, identified}`` from the
+        five-term fit, plus ``readoff`` and ``readoff_tau_s`` for ``arw``,
+        ``bias_instability`` and ``rrw`` (``None`` where the curve has no such
+        line).
+    """
+
+    name: str
+    column: str
+    fs_hz: float
+    tau_s: np.ndarray
+    adev: np.ndarray
+    adev_lo: np.ndarray
+    adev_hi: np.ndarray
+    n: np.ndarray
+    alpha: np.ndarray
+    edf: np.ndarray
+    confidence: float
+    terms: dict
+
+    def to_dict(self) -> dict:
+        """The series in the ``allan.json`` contract shape (plain JSON values)."""
+        return {
+            "name": self.name,
+            "column": self.column,
+            "fs_hz": float(self.fs_hz),
+            "confidence": float(self.confidence),
+            "tau_s": self.tau_s.tolist(),
+            "adev": self.adev.tolist(),
+            "adev_lo": self.adev_lo.tolist(),
+            "adev_hi": self.adev_hi.tolist(),
+            "n": [int(v) for v in self.n],
+            "alpha": [int(v) for v in self.alpha],
+            "edf": self.edf.tolist(),
+            "terms": self.terms,
+        }
+
+
+def analyse(
+    x,
+    fs_hz: float,
+    *,
+    taus=None,
+    name: str = "",
+    column: str = "rate",
+    settings: AllanConfig = AllanConfig(),
+) -> AllanSeries:
+    """Allan deviation with confidence intervals and IEEE Std 952 noise terms.
+
+    Parameters
+    ----------
+    x : array_like, shape (n_samples,)
+        Rate samples [deg/s].
+    fs_hz : float
+        Sample rate.
+    taus : see :func:`oadev`, default ``settings.taus`` (``"octave"``)
+    name, column : str
+        Labels carried into the result.
+    settings : AllanConfig
+
+    Returns
+    -------
+    AllanSeries
+
+    Notes
+    -----
+    Five-term model ([4]_ eq. (C.16)), fitted to sigma^2(tau) by non-negative
+    weighted least squares in the coefficients Q^2, N^2, B^2, K^2, R^2:
+
+        sigma^2(tau) = 3 Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2
+
+    with weights 1 / (sigma_model^4 (2/edf + e^2)): the inverse variance of a
+    chi-square variance estimate plus a relative model error e
+    (`settings.model_error`), so that the thousands of degrees of freedom at
+    the shortest taus do not let unmodelled effects there (sensor filters,
+    correlated noise) pull the whole fit; iterated three times from the
+    measured values. The reported sigma propagates the coefficient covariance, scaled
+    up by the reduced chi-square when that exceeds one; it ignores the
+    correlation between overlapping estimates at neighbouring taus.
+    """
+    fs_hz = check_fs(fs_hz)
+    return _series(Phase(_phase(x)), fs_hz, taus, name, column, settings)
+
+
+def analyse_chunks(
+    chunks: Callable[[], Iterable[np.ndarray]],
+    fs_hz: Callable[[], float] | float,
+    *,
+    taus=None,
+    name: str = "",
+    column: str = "rate",
+    settings: AllanConfig = AllanConfig(),
+    folder: str | None = None,
+) -> AllanSeries:
+    """:func:`analyse` of a series read chunk by chunk, in memory that does not grow with its length.
+
+    Parameters
+    ----------
+    chunks : callable returning an iterable of ndarray
+        Each call reads the series again from its start, in consecutive
+        chunks [deg/s]; it is called twice (the mean, then the phase).
+    fs_hz : float, or callable returning float
+        Sample rate; a callable is asked after the first reading (a
+        streamed recording knows it from its first chunk).
+    taus, name, column, settings
+        As in :func:`analyse`.
+    folder : str, optional
+        Where the phase of a series longer than
+        ``settings.max_phase_in_memory`` samples is spilled (a temporary
+        float64 file, 8 bytes a sample; default the system's temporary folder).
+
+    Returns
+    -------
+    AllanSeries
+        Equal to :func:`analyse` of the whole series to rounding (the mean
+        is summed chunk by chunk), whatever the chunks.
+
+    Notes
+    -----
+    Memory: the chunks, and windows of `_CHUNK` samples of the phase
+    (3 of them per tau beyond a chunk). A series of 3e8 samples spills a
+    2.4 GB phase file, which the operating system's page cache, not the
+    process, holds.
+    """
+    total, n_samples = 0.0, 0
+    for y in chunks():
+        y = np.asarray(y, dtype=float)
+        part = float(y.sum())
+        if not math.isfinite(part):
+            i = int(np.flatnonzero(~np.isfinite(y))[0])
+            raise InputError(f"rate sample {n_samples + i} is {y[i]!r}; the Allan deviation needs finite values")
+        total += part
+        n_samples += len(y)
+    if n_samples < 3:
+        raise InputError(f"Allan deviation needs at least 3 samples, got {n_samples}")
+    fs_hz = check_fs(fs_hz() if callable(fs_hz) else fs_hz)
+    in_memory = n_samples <= settings.max_phase_in_memory
+    phase = integrate(chunks(), total / n_samples, n_samples, in_memory=in_memory, folder=folder)
+    try:
+        return _series(phase, fs_hz, taus, name, column, settings)
+    finally:
+        phase.close()
+
+
+def _series(phase: Phase, fs_hz: float, taus, name: str, column: str, settings: AllanConfig) -> AllanSeries:
+    n_samples = len(phase) - 1
+    m = averaging_factors(settings.taus if taus is None else taus, n_samples, fs_hz)
+    n = len(phase) - 2 * m
+    avar = second_difference_sums(phase, m) / (2.0 * n * m.astype(float) ** 2)
+    adev = np.sqrt(avar)
+    alpha = np.array([noise_id(phase, int(k), settings.min_acf_points) for k in m], dtype=int)
+    edf = np.array([edf_oadev(int(a), int(k), n_samples + 1) for a, k in zip(alpha, m)])
+    lo, hi = chi2_interval(adev, edf, settings.confidence)
+    tau = m / fs_hz
+    terms = fit_terms(tau, avar, edf, settings.identify_sigmas, settings.model_error)
+    add_readoffs(terms, tau, adev, settings)
+    return AllanSeries(
+        name=name,
+        column=column,
+        fs_hz=fs_hz,
+        tau_s=tau,
+        adev=adev,
+        adev_lo=lo,
+        adev_hi=hi,
+        n=n,
+        alpha=alpha,
+        edf=edf,
+        confidence=settings.confidence,
+        terms=terms,
+    )
+
+
+def allan_artefact(series: Sequence[AllanSeries], *, inputs: list[dict], settings: dict) -> dict:
+    """The ``allan.json`` artefact: header (schema ``gyrocomp.allan``) and ``series``."""
+    from gyrocomp.artefacts import artefact_header
+
+    header = artefact_header("gyrocomp.allan", inputs=inputs, settings=settings)
+    return {**header, "series": [s.to_dict() for s in series]}
+
+
+def check_thresholds(
+    series: Sequence[AllanSeries],
+    *,
+    max_arw: float | None = None,
+    max_bias_instability: float | None = None,
+    max_rrw: float | None = None,
+) -> None:
+    """Raise :class:`~gyrocomp.errors.ThresholdError` when a read-off exceeds its bound.
+
+    The bounds apply to every series and compare the classic read-offs
+    (datasheet convention): N [deg/sqrt(h)], B [deg/h], K [deg/h/sqrt(h)].
+    A series without the relevant line (read-off ``None``) falls back to
+    the fitted value.
+    """
+    bounds = {"arw": max_arw, "bias_instability": max_bias_instability, "rrw": max_rrw}
+    for s in series:
+        for key, bound in bounds.items():
+            if bound is None:
+                continue
+            term = s.terms[key]
+            value = term["readoff"] if term["readoff"] is not None else term["value"]
+            if value > bound:
+                raise ThresholdError(
+                    f"{s.name} `{s.column}`: {key} = {value:.4g} {term['unit']} exceeds "
+                    f"--max-{key.replace('_', '-')} {bound:g}"
+                )

@@ -1,0 +1,142 @@
+"""The IEEE Std 952 five-term fit to an Allan variance, and the classic slope read-offs.
+
+References
+----------
+.. [1] IEEE Std 952-1997, "IEEE Standard Specification Format Guide and Test
+       Procedure for Single-Axis Interferometric Fiber Optic Gyros", Annex C.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from gyrocomp.allan import ieee952
+
+if TYPE_CHECKING:
+    from gyrocomp.allan.analysis import AllanConfig
+
+__all__ = ["fit_terms", "add_readoffs"]
+
+
+def fit_terms(tau: np.ndarray, avar: np.ndarray, edf: np.ndarray, identify_sigmas: float, model_error: float) -> dict:
+    """Non-negative weighted least squares of the five-term model (see :func:`gyrocomp.allan.analyse`).
+
+    Returns
+    -------
+    dict
+        Per term of :data:`~gyrocomp.allan.ieee952.TERMS`: ``value`` and
+        ``sigma`` in the datasheet unit, ``unit``, ``identified``.
+    """
+    basis = ieee952.avar_basis(tau)
+    scale = np.linalg.norm(basis, axis=0)
+    a = basis / scale
+    model = avar.copy()
+    coef, active, cov = np.zeros(len(ieee952.TERMS)), np.zeros(len(ieee952.TERMS), bool), np.zeros((0, 0))
+    for _ in range(3):
+        rel_var = 2.0 / edf + model_error**2
+        w = 1.0 / (np.sqrt(rel_var) * np.maximum(model, np.finfo(float).tiny))
+        coef, active, cov, chi2 = _nnls_subsets(a * w[:, None], avar * w)
+        model = a @ coef
+    dof = max(len(tau) - int(active.sum()), 1)
+    inflate = max(1.0, chi2 / dof)
+    aw = a * w[:, None]
+    full_cov = np.linalg.pinv(aw.T @ aw) * inflate
+    var_c = np.diag(full_cov).copy()
+    var_c[active] = np.diag(cov) * inflate
+    terms = {}
+    for i, key in enumerate(ieee952.TERMS):
+        unit, factor = ieee952.UNITS[key], ieee952.FACTORS[key]
+        c = coef[i] / scale[i]
+        sigma_c = math.sqrt(max(var_c[i], 0.0)) / scale[i]
+        if c > 0:
+            value, sigma = math.sqrt(c), sigma_c / (2.0 * math.sqrt(c))
+        else:
+            value, sigma = 0.0, math.sqrt(sigma_c)
+        terms[key] = {
+            "value": value * factor,
+            "unit": unit,
+            "sigma": sigma * factor,
+            "identified": bool(c > identify_sigmas * sigma_c),
+        }
+    return terms
+
+
+def _nnls_subsets(a: np.ndarray, b: np.ndarray):
+    """Exact non-negative least squares for a few columns: best feasible active set."""
+    k = a.shape[1]
+    best = None
+    for size in range(1, k + 1):
+        for cols in itertools.combinations(range(k), size):
+            sub = a[:, cols]
+            if np.linalg.matrix_rank(sub) < size:
+                continue
+            sol = np.linalg.lstsq(sub, b, rcond=None)[0]
+            if (sol <= 0).any():
+                continue
+            chi2 = float(np.sum((sub @ sol - b) ** 2))
+            if best is None or chi2 < best[0]:
+                best = (chi2, cols, sol, sub)
+    coef = np.zeros(k)
+    active = np.zeros(k, bool)
+    if best is None:
+        return coef, active, np.zeros((0, 0)), float(np.sum(b**2))
+    chi2, cols, sol, sub = best
+    coef[list(cols)] = sol
+    active[list(cols)] = True
+    return coef, active, np.linalg.inv(sub.T @ sub), chi2
+
+
+def add_readoffs(terms: dict, tau: np.ndarray, adev: np.ndarray, settings: AllanConfig) -> None:
+    """Classic IEEE 952 read-offs: N on the -1/2 line at 1 s, K on the +1/2 line at 3 s, B = minimum / 0.664.
+
+    B uses the first local minimum of the curve (the flicker floor before
+    rate random walk or drift lifts it), the last point when the curve only
+    falls. Each line is read in its own tau range, the way the terms appear
+    on an Allan curve: the -1/2 line (angle random walk) at or below that
+    minimum, the +1/2 line (rate random walk) at or above it. A line is the
+    longest run there of consecutive log-log segments whose slope is within
+    `slope_tolerance` of -1/2 (+1/2); its level is the geometric mean of
+    sigma * tau^(-slope) over the run. Without a run the read-off is
+    ``None`` and ``readoff_note`` says so: a denoised recording, whose curve
+    rises first and falls as tau^(-1/2) only at thousands of seconds, has no
+    angle random walk to read, though a -1/2 stretch exists far above 1 s.
+    """
+    rising = np.flatnonzero(np.diff(adev) > 0)
+    i = int(rising[0]) if rising.size else len(adev) - 1
+    ranges = {"arw": (-0.5, settings.arw_tau_s, slice(0, i + 1), "at or below"), "rrw": (0.5, settings.rrw_tau_s, slice(i, len(tau)), "at or above")}
+    for key, (slope, at, window, where) in ranges.items():
+        run = _longest_run(tau[window], adev[window], slope, settings.slope_tolerance)
+        factor = ieee952.FACTORS[key]
+        if run is None:
+            note = f"no {slope:+.1f} slope {where} the Allan minimum (tau = {tau[i]:.3g} s)"
+            terms[key].update(readoff=None, readoff_tau_s=None, readoff_note=note)
+            continue
+        run = run + window.start
+        level = np.exp(np.mean(np.log(adev[run]) - slope * np.log(tau[run])))
+        terms[key].update(readoff=float(level * at**slope * factor), readoff_tau_s=[float(tau[run[0]]), float(tau[run[-1]])])
+    terms["bias_instability"].update(
+        readoff=float(adev[i] / settings.bias_factor * ieee952.FACTORS["bias_instability"]),
+        readoff_tau_s=float(tau[i]),
+    )
+
+
+def _longest_run(tau, adev, slope, tolerance):
+    if len(tau) < 2:
+        return None
+    local = np.diff(np.log(adev)) / np.diff(np.log(tau))
+    ok = np.abs(local - slope) <= tolerance
+    best, start = None, None
+    for i, flag in enumerate(np.append(ok, False)):
+        if flag and start is None:
+            start = i
+        elif not flag and start is not None:
+            if best is None or i - start > best[1] - best[0]:
+                best = (start, i)
+            start = None
+    if best is None:
+        return None
+    return np.arange(best[0], best[1] + 1)

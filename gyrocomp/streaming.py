@@ -1,0 +1,378 @@
+"""Recordings read, and tables written, chunk by chunk in constant memory.
+
+A log of 10^8 samples does not fit the way :func:`gyrocomp.recordings.read_recording`
+reads it (every column at once), and a log still being written
+(``tail -f log.csv | gyrocomp compensate - ...``) has no end to wait for.
+:func:`read_chunks` reads CSV (a file or standard input) ``rows`` lines at a
+time and Parquet row group by row group, and hands out chunks of exactly
+``rows`` samples (the last one shorter), so any computation that processes
+them in order sees the same blocks however the file was stored.
+:class:`TableWriter` writes each chunk as soon as it is computed.
+
+Each chunk is validated as :func:`gyrocomp.recordings.recording_from_frame`
+validates a whole recording (columns, units, finite values, plausible
+temperature and time base, strictly increasing time, no gap, jitter
+against the chunk's median interval), the errors naming the line or row
+in the whole file; across a chunk boundary the time must go on
+increasing, within the jitter tolerance of the first chunk's interval.
+The sample rate is the first chunk's (its median interval): what a stream
+can know when it starts. Time in seconds only (:func:`supports`): other
+units count from each chunk's first stamp.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+from pathlib import Path
+from typing import Callable, Iterator, Sequence
+
+import numpy as np
+
+from gyrocomp import artefacts, recordings
+from gyrocomp.errors import InputError
+from gyrocomp.recordings import ColumnSpec
+
+__all__ = ["CHUNK_ROWS", "ChunkReader", "supports", "read_chunks", "TableWriter"]
+
+CHUNK_ROWS = 1 << 16
+"""Samples per chunk (the rows :meth:`gyrocomp.models._base.Learner.predict` evaluates at once)."""
+
+
+class ChunkReader:
+    """Iterate over a recording in chunks of `rows` samples (see :func:`read_chunks`).
+
+    Attributes
+    ----------
+    name : str
+        The file's name (``"-"`` for standard input).
+    fs_hz : float or None
+        Sample rate, from the first chunk's median interval (None before it).
+    metadata : dict
+        The ``gyrocomp`` metadata of a Parquet file written by this tool.
+    n_samples : int
+        Samples read so far.
+    """
+
+    def __init__(self, path, columns: ColumnSpec, *, rows: int, require_temperature: bool, usecols, jitter_tolerance: float):
+        self.name = "-" if str(path) == "-" else os.fspath(path)
+        self.columns = columns
+        self.rows = int(rows)
+        self.require_temperature = require_temperature
+        self.usecols = None if usecols is None else list(dict.fromkeys(usecols))
+        self.jitter_tolerance = jitter_tolerance
+        self.fs_hz = None
+        self.metadata = {}
+        self.n_samples = 0
+        self._kind = recordings._kind(self.name)
+        self._hash = hashlib.sha256()
+        self._sha256 = None if self.name == "-" else artefacts.file_sha256(self.name)
+        self._done = False
+
+    @property
+    def sha256(self) -> str:
+        """SHA-256 of the file's bytes (of standard input: once it has been read to the end)."""
+        if self._sha256 is not None:
+            return self._sha256
+        if not self._done:
+            raise RuntimeError("the SHA-256 of standard input is known once it has been read to the end")
+        return self._hash.hexdigest()
+
+    def input_record(self) -> dict:
+        """The ``inputs`` entry of an artefact header for this recording."""
+        return {"name": Path(self.name).name, "sha256": self.sha256}
+
+    def __iter__(self) -> Iterator[recordings.Recording]:
+        where, first = ("row", 1) if self._kind == "parquet" else ("line", 2)
+        last_time = None
+        nominal = None
+        frames = self._csv_frames() if self._kind == "csv" else _exact_rows(self._parquet_frames(), self.rows)
+        for frame in frames:
+            chunk = recordings.recording_from_frame(
+                frame,
+                name=self.name,
+                sha256="",
+                columns=self.columns,
+                require_temperature=self.require_temperature,
+                min_samples=2 if self.n_samples == 0 else 1,
+                jitter_tolerance=self.jitter_tolerance,
+                _where=(where, first + self.n_samples),
+                _owned=True,
+            )
+            if chunk.time_origin is not None:
+                raise InputError(f"{self.name}: a streamed recording needs its time in seconds (--time-unit s)")
+            time = chunk.time_s
+            if nominal is None:
+                nominal = 1.0 / chunk.fs_hz
+                self.fs_hz = chunk.fs_hz
+            else:
+                step = float(time[0]) - last_time
+                if step <= 0 or abs(step - nominal) > self.jitter_tolerance * nominal:
+                    raise InputError(
+                        f"{self.name} {where} {first + self.n_samples}: `{self.columns.time}` = {float(time[0])!r} "
+                        f"after {last_time!r}; a streamed recording needs strictly increasing time at the "
+                        f"interval of its start, {nominal:.6g} s (tolerance {self.jitter_tolerance:.0%})"
+                    )
+            last_time = float(time[-1])
+            self.n_samples += len(time)
+            yield chunk
+        if self.n_samples == 0:
+            raise InputError(f"{self.name}: has a header but no data rows")
+        self._done = True
+
+    def _csv_frames(self):
+        import pandas as pd
+
+        source = _HashingReader(sys.stdin.buffer, self._hash) if self.name == "-" else self.name
+        spec = self.columns
+        sep = recordings._SEPARATOR_WORDS.get(spec.sep, spec.sep)
+        try:
+            reader = pd.read_csv(
+                source, sep=sep, decimal=spec.decimal, comment="#", skipinitialspace=True, usecols=self._wanted(),
+                compression=None if self.name == "-" else "infer", engine="python" if sep == r"\s+" else "c", chunksize=self.rows,
+            )
+            with reader:
+                yield from reader
+        except pd.errors.EmptyDataError:
+            raise InputError(f"{self.name}: file is empty") from None
+        except pd.errors.ParserError as err:
+            raise InputError(f"{self.name}: unreadable CSV ({str(err).strip().splitlines()[-1]})") from None
+        except UnicodeDecodeError:
+            raise InputError(f"{self.name}: not a text CSV file") from None
+        except (OSError, EOFError, ValueError) as err:  # a damaged .gz/.zip
+            raise InputError(f"{self.name}: unreadable CSV ({str(err).strip().splitlines()[-1] if str(err).strip() else type(err).__name__})") from None
+
+    def _wanted(self):
+        """The file columns to read, as a predicate on names (None: all): time, the axes, `usecols`."""
+        import fnmatch
+
+        if self.usecols is None:
+            return None
+        patterns = (self.columns.time, *self.columns.rate_patterns, *self.usecols)
+        return lambda c: any(fnmatch.fnmatchcase(str(c), p) for p in patterns)
+
+    def _parquet_frames(self):
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        if os.path.getsize(self.name) == 0:
+            raise InputError(f"{self.name}: file is empty")
+        try:
+            parquet = pq.ParquetFile(self.name)
+        except (pa.ArrowInvalid, OSError) as err:
+            raise InputError(f"{self.name}: not a readable Parquet file ({err})") from None
+        self.metadata = artefacts.parquet_header(self.name, parquet.schema_arrow.metadata)
+        keep = self._wanted()
+        wanted = [c for c in parquet.schema_arrow.names if keep is None or keep(c)]
+        for group in range(parquet.num_row_groups):
+            table = parquet.read_row_group(group, columns=wanted)
+            yield {c: _numpy(table.column(c)) for c in table.column_names}
+
+
+def supports(path: str | os.PathLike, columns: ColumnSpec = ColumnSpec()) -> bool:
+    """Whether :func:`read_chunks` reads this recording: CSV or Parquet, time in seconds, no duplicates to merge."""
+    name = "-" if str(path) == "-" else os.fspath(path)
+    return recordings._kind(name) in ("csv", "parquet") and columns.time_unit in (None, "s") and columns.dedupe is None
+
+
+def read_chunks(
+    path: str | os.PathLike,
+    columns: ColumnSpec = ColumnSpec(),
+    *,
+    rows: int = CHUNK_ROWS,
+    require_temperature: bool = False,
+    usecols: Sequence[str] | None = None,
+    jitter_tolerance: float = 0.5,
+) -> ChunkReader:
+    """A recording as an iterable of validated chunks of `rows` samples.
+
+    Parameters
+    ----------
+    path : path-like or "-"
+        ``.csv`` or ``.parquet``; ``"-"`` reads CSV from standard input.
+    columns : ColumnSpec
+        Column names, units and CSV format (see :func:`supports`).
+    rows : int
+        Samples per chunk (the last chunk holds the rest).
+    require_temperature : bool
+        Refuse a recording without the temperature column.
+    usecols : sequence of str, optional
+        File columns (names or globs) to read beside the time and the axes; default all.
+    jitter_tolerance : float
+        As in :func:`gyrocomp.recordings.read_recording`.
+
+    Returns
+    -------
+    ChunkReader
+        Iterating it yields :class:`gyrocomp.recordings.Recording` chunks; a second
+        iteration reads the file again (not standard input).
+    """
+    if rows < 2:
+        raise InputError(f"chunks of {rows} rows; need at least 2")
+    return ChunkReader(path, columns, rows=rows, require_temperature=require_temperature, usecols=usecols, jitter_tolerance=jitter_tolerance)
+
+
+class TableWriter:
+    """Write a table chunk by chunk: CSV (``-`` is standard output) or Parquet by extension.
+
+    Parameters
+    ----------
+    path : path-like or "-"
+    header : callable returning dict, or dict
+        The artefact header (:func:`gyrocomp.artefacts.artefact_header`) stored in a
+        Parquet file's metadata; a callable is asked when the header is
+        needed: at the first chunk when `header_known_first`, else at
+        :meth:`close` (the Parquet file is then copied once, row group by
+        row group, into one carrying the header).
+    header_known_first : bool
+
+    Notes
+    -----
+    A file is written under a temporary name and renamed by :meth:`close`
+    (:func:`gyrocomp.artefacts.atomic_path`), so a failure leaves nothing half
+    written; standard output gets each chunk as it comes and is flushed.
+    The CSV bytes of consecutive chunks are those of the whole table
+    written at once by :func:`gyrocomp.artefacts.write_table`.
+    """
+
+    def __init__(self, path, header: Callable[[], dict] | dict, *, header_known_first: bool = True):
+        self.path = str(path)
+        self._header = header if callable(header) else (lambda: header)
+        self._first = header_known_first
+        self._kind = "csv" if self.path == "-" else recordings._kind(self.path)
+        self._atomic = None
+        self._tmp = None
+        self._parquet = None
+        self._rows = 0
+
+    def __enter__(self) -> "TableWriter":
+        if self.path != "-":
+            self._atomic = artefacts.atomic_path(self.path)
+            self._tmp = self._atomic.__enter__()
+        return self
+
+    def write(self, frame) -> None:
+        """Append the rows of a pandas DataFrame."""
+        if self._kind == "csv":
+            target = sys.stdout if self.path == "-" else self._tmp
+            mode = "w" if self._rows == 0 else "a"
+            frame.to_csv(target, index=False, header=self._rows == 0, mode=mode)
+            if self.path == "-":
+                sys.stdout.flush()
+        else:
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            table = pa.Table.from_pandas(frame, preserve_index=False)
+            if self._parquet is None:
+                schema = table.schema.remove_metadata()
+                if self._first:
+                    schema = schema.with_metadata(_header_metadata(self._header()))
+                target = self._tmp if self._first else self._tmp + ".unheaded"
+                self._parquet = pq.ParquetWriter(target, schema)
+            self._parquet.write_table(table.cast(self._parquet.schema))
+        self._rows += len(frame)
+
+    def __exit__(self, kind, value, tb) -> None:
+        try:
+            if kind is None and self._parquet is not None:
+                self._parquet.close()
+                if not self._first:
+                    _copy_with_header(self._tmp + ".unheaded", self._tmp, _header_metadata(self._header()))
+        finally:
+            if self._parquet is not None and not self._first and os.path.exists(self._tmp + ".unheaded"):
+                os.remove(self._tmp + ".unheaded")
+            if self._atomic is not None:
+                self._atomic.__exit__(kind, value, tb)
+
+
+class _HashingReader:
+    """A binary stream that feeds what is read from it into a hash."""
+
+    def __init__(self, raw, digest):
+        self._raw, self._digest = raw, digest
+
+    def read(self, size: int = -1) -> bytes:
+        data = self._raw.read(size)
+        self._digest.update(data)
+        return data
+
+    def readinto(self, buffer) -> int:
+        data = self.read(len(buffer))
+        buffer[: len(data)] = data
+        return len(data)
+
+    def readable(self) -> bool:
+        return True
+
+    def __iter__(self):
+        return iter(self.readline, b"")
+
+    def readline(self, size: int = -1) -> bytes:
+        data = self._raw.readline(size)
+        self._digest.update(data)
+        return data
+
+
+def _numpy(column) -> np.ndarray:
+    """An Arrow column as NumPy: a null-free numeric one from its data buffers (no pandas), else ``to_numpy``."""
+    import pyarrow as pa
+
+    if column.null_count or not (pa.types.is_floating(column.type) or pa.types.is_integer(column.type)):
+        return column.to_numpy()
+    dtype = np.dtype(column.type.to_pandas_dtype())
+    parts = [np.frombuffer(c.buffers()[1], dtype=dtype, count=len(c), offset=c.offset * dtype.itemsize) for c in column.chunks]
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+def _exact_rows(frames, rows: int):
+    """Re-cut a sequence of column dicts into dicts of exactly `rows` rows (the last one shorter)."""
+    pending = []
+    held = 0
+    for frame in frames:
+        length = len(next(iter(frame.values()))) if frame else 0
+        if length == 0:
+            continue
+        pending.append(frame)
+        held += length
+        while held >= rows:
+            yield _take(pending, rows)
+            held -= rows
+    if held:
+        yield _take(pending, held)
+
+
+def _take(pending: list, rows: int) -> dict:
+    """The first `rows` rows of the queued frames, removed from the queue."""
+    parts = []
+    need = rows
+    while need:
+        frame = pending[0]
+        length = len(next(iter(frame.values())))
+        if length <= need:
+            parts.append(pending.pop(0))
+            need -= length
+        else:
+            parts.append({c: v[:need] for c, v in frame.items()})
+            pending[0] = {c: v[need:] for c, v in frame.items()}
+            need = 0
+    if len(parts) == 1:
+        return parts[0]
+    return {c: np.concatenate([p[c] for p in parts]) for c in parts[0]}
+
+
+def _header_metadata(header: dict) -> dict:
+    """Parquet key-value metadata holding an artefact header, as :func:`gyrocomp.artefacts.write_table` stores it."""
+    import json
+
+    return {artefacts.METADATA_KEY: json.dumps(artefacts.jsonable(header), sort_keys=True).encode()}
+
+
+def _copy_with_header(source: str, target: str, metadata: dict) -> None:
+    import pyarrow.parquet as pq
+
+    parquet = pq.ParquetFile(source)
+    with pq.ParquetWriter(target, parquet.schema_arrow.with_metadata(metadata)) as writer:
+        for group in range(parquet.num_row_groups):
+            writer.write_table(parquet.read_row_group(group))
