@@ -1,0 +1,287 @@
+"""Long, fast logs (issue 19): causal compensation against `allan`, memory at 1x and 10x, streaming, Allan past memory.
+
+Every figure is a ratio of two measurements taken in the same run, each the
+whole process (``python -m gyrocomp ...``), peak resident memory from
+``/usr/bin/time -v``. Parts, run one at a time (``python benchmarks/bench_long.py PART``):
+
+``compensate``
+    2 h at 1 kHz (7.2e6 samples, Parquet): ``compensate --mode causal`` with
+    the polynomial model and with PE-LCD-ANFIS (both trained on
+    ``sample_data``) over ``allan`` on the same file; median of `REPEATS`.
+``memory``
+    Peak memory of causal compensation on 12 min and on 2 h at 1 kHz (1x and
+    10x), and the size of the extra input columns.
+``stream``
+    ``compensate -`` reading CSV from standard input: peak memory on the 1x
+    and the 10x stream, and the wall time against the one-shot file.
+``allantools``
+    ``allan`` on 10^8 samples (Parquet) against ``allantools.oadev`` on the
+    same samples in memory.
+``big``
+    ``allan`` on 3e8 samples (1 kHz, 83 h, Parquet) under 1 GB, against
+    :func:`gyrocomp.allan.analyse` of the whole array in memory (relative
+    difference of every deviation). The file is deleted afterwards.
+``rate``
+    The O(1) dT/dt against the direct FIR (``np.convolve``) on 10 min at
+    1 kHz, and its rounding after 10^8 samples of a stream against the exact
+    window slope there.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+DATA = HERE / "_data"
+RESULTS = HERE / "results" / "long.json"
+FS_HZ = 1000.0
+REPEATS = 3
+SEED = 19
+
+
+def gyrocomp(*args) -> list[str]:
+    """This checkout's gyrocomp, whatever is installed."""
+    return [sys.executable, "-c", f"import sys; sys.path.insert(0, {str(ROOT)!r}); from gyrocomp.cli import main; main()", "--quiet", *map(str, args)]
+
+
+def oven(path: Path, seconds: float, *, seed: int = SEED, rows: int = 1 << 20) -> Path:
+    """A 1 kHz oven log, written row group by row group: a 1 degC/min ramp and soaks, white rate noise."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if path.exists():
+        return path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    n = int(seconds * FS_HZ)
+    with pq.ParquetWriter(path, pa.schema([("time", pa.float64()), ("rate", pa.float64()), ("temperature", pa.float64())])) as writer:
+        for start in range(0, n, rows):
+            i = np.arange(start, min(start + rows, n))
+            t = i / FS_HZ
+            temperature = 25.0 + 20.0 * np.sin(2 * np.pi * t / 7200.0) + rng.normal(0, 0.02, len(i))
+            rate = 0.1 + 0.002 * (temperature - 25.0) + rng.normal(0, 0.05, len(i))
+            writer.write_table(pa.table({"time": t, "rate": rate, "temperature": temperature}))
+    return path
+
+
+def timed(cmd: list[str], stdin: Path | None = None) -> tuple[float, float, float]:
+    """Wall [s], CPU (user + system) [s] and peak RSS [MB] of one child process."""
+    start = time.perf_counter()
+    with open(stdin, "rb") if stdin else open("/dev/null", "rb") as source:
+        proc = subprocess.run(["/usr/bin/time", "-v", *cmd], stdin=source, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    wall = time.perf_counter() - start
+    if proc.returncode:
+        raise RuntimeError(proc.stderr[-2000:])
+    fields = dict(line.strip().split(": ", 1) for line in proc.stderr.splitlines() if ": " in line)
+    cpu = float(fields["User time (seconds)"]) + float(fields["System time (seconds)"])
+    return wall, cpu, int(fields["Maximum resident set size (kbytes)"]) / 1024.0
+
+
+def models() -> dict:
+    """The polynomial and PE-LCD-ANFIS models, trained on sample_data (1 Hz; the rate window is 60 s at any rate)."""
+    train = ROOT / "sample_data" / "oven_train.parquet"
+    polynomial, anfis = DATA / "model_polynomial.json", DATA / "model_pe-lcd-anfis.json"
+    if not polynomial.exists():
+        subprocess.run(gyrocomp("train", train, "-c", "polynomial", "--out", polynomial), check=True)
+    if not anfis.exists():
+        components, classes = DATA / "components.parquet", DATA / "classes.json"
+        subprocess.run(gyrocomp("decompose", train, "--config", "pe-lcd-anfis", "--out", components), check=True)
+        subprocess.run(gyrocomp("classify", components, "--config", "pe-lcd-anfis", "--out", classes), check=True)
+        subprocess.run(gyrocomp("train", components, classes, "--config", "pe-lcd-anfis", "--out", anfis), check=True)
+    return {"polynomial": polynomial, "pe-lcd-anfis": anfis}
+
+
+def part_compensate() -> dict:
+    source = oven(DATA / "oven_2h_1khz.parquet", 7200.0)
+    runs = {"allan": [], "polynomial": [], "pe-lcd-anfis": []}
+    cmds = {"allan": gyrocomp("allan", source, "--out", DATA / "a.json")}
+    for name, model in models().items():
+        cmds[name] = gyrocomp("compensate", source, model, "--mode", "causal", "--out", DATA / f"c_{name}.parquet")
+    for _ in range(REPEATS):
+        for name, cmd in cmds.items():
+            runs[name].append(timed(cmd))
+    med = {name: (statistics.median(r[0] for r in rs), statistics.median(r[1] for r in rs)) for name, rs in runs.items()}
+    return {
+        "n_samples": 7_200_000,
+        "repeats": REPEATS,
+        "wall_s": {k: v[0] for k, v in med.items()},
+        "cpu_s": {k: v[1] for k, v in med.items()},
+        "polynomial_over_allan_wall": med["polynomial"][0] / med["allan"][0],
+        "anfis_over_allan_wall": med["pe-lcd-anfis"][0] / med["allan"][0],
+        "polynomial_over_allan_cpu": med["polynomial"][1] / med["allan"][1],
+        "anfis_over_allan_cpu": med["pe-lcd-anfis"][1] / med["allan"][1],
+    }
+
+
+def part_memory() -> dict:
+    short, long = oven(DATA / "oven_12min_1khz.parquet", 720.0), oven(DATA / "oven_2h_1khz.parquet", 7200.0)
+    model = models()["pe-lcd-anfis"]
+    peaks = [timed(gyrocomp("compensate", f, model, "--mode", "causal", "--out", DATA / "m.parquet"))[2] for f in (short, long)]
+    extra_mb = 3 * 8 * (7_200_000 - 720_000) / 2**20  # time, rate, temperature
+    return {
+        "peak_1x_mb": peaks[0],
+        "peak_10x_mb": peaks[1],
+        "ratio_10x_1x": peaks[1] / peaks[0],
+        "extra_input_columns_mb": extra_mb,
+        "bound_mb": 1.3 * peaks[0] + extra_mb,
+    }
+
+
+def part_stream() -> dict:
+    import pyarrow.parquet as pq
+
+    model = models()["pe-lcd-anfis"]
+    csvs = []
+    for seconds, label in ((720.0, "12min"), (7200.0, "2h")):
+        csv = DATA / f"oven_{label}_1khz.csv"
+        if not csv.exists():
+            pq.read_table(oven(DATA / f"oven_{label}_1khz.parquet", seconds)).to_pandas().to_csv(csv, index=False)
+        csvs.append(csv)
+    stream = [timed(gyrocomp("compensate", "-", model, "--mode", "causal", "--out", "-"), stdin=csv) for csv in csvs]
+    one_shot = timed(gyrocomp("compensate", csvs[1], model, "--mode", "causal", "--resample", "--out", DATA / "oneshot.csv"))
+    return {
+        "stream_peak_1x_mb": stream[0][2],
+        "stream_peak_10x_mb": stream[1][2],
+        "stream_ratio_10x_1x": stream[1][2] / stream[0][2],
+        "stream_10x_wall_s": stream[1][0],
+        "one_shot_10x_wall_s": one_shot[0],
+        "one_shot_10x_peak_mb": one_shot[2],
+        "stream_over_one_shot_wall": stream[1][0] / one_shot[0],
+    }
+
+
+ALLANTOOLS = """
+import sys, allantools, pyarrow.parquet as pq
+rate = pq.read_table(sys.argv[1], columns=["rate"]).column("rate").to_numpy()
+tau, adev, err, n = allantools.oadev(rate, rate=1000.0, data_type="freq", taus="octave")
+"""
+
+
+def part_allantools() -> dict:
+    source = allan_log(DATA / "allan_1e8.parquet", 10**8)
+    ours = timed(gyrocomp("allan", source, "--out", DATA / "a8.json"))
+    theirs = timed([sys.executable, "-c", ALLANTOOLS, str(source)])
+    return {
+        "n_samples": 10**8,
+        "gyrocomp_wall_s": ours[0], "allantools_wall_s": theirs[0], "wall_ratio": ours[0] / theirs[0],
+        "gyrocomp_cpu_s": ours[1], "allantools_cpu_s": theirs[1], "cpu_ratio": ours[1] / theirs[1],
+        "gyrocomp_peak_mb": ours[2], "allantools_peak_mb": theirs[2], "memory_ratio": ours[2] / theirs[2],
+    }
+
+
+def allan_log(path: Path, n: int, rows: int = 1 << 20) -> Path:
+    """Time and rate at 1 kHz: white noise, a random walk and a slow drift, row group by row group."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if path.exists():
+        return path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(SEED)
+    walk = 0.0
+    with pq.ParquetWriter(path, pa.schema([("time", pa.float64()), ("rate", pa.float64())])) as writer:
+        for start in range(0, n, rows):
+            i = np.arange(start, min(start + rows, n))
+            steps = np.cumsum(rng.normal(0, 1e-5, len(i))) + walk
+            walk = float(steps[-1])
+            rate = 0.2 + rng.normal(0, 0.05, len(i)) + steps
+            writer.write_table(pa.table({"time": i / FS_HZ, "rate": rate}))
+    return path
+
+
+IN_MEMORY = """
+import json, sys, pyarrow.parquet as pq
+sys.path.insert(0, sys.argv[3])
+from gyrocomp import allan
+rate = pq.read_table(sys.argv[1], columns=["rate"]).column("rate").to_numpy()
+s = allan.analyse(rate, 1000.0)
+json.dump({"adev": s.adev.tolist(), "edf": s.edf.tolist(), "alpha": s.alpha.tolist()}, open(sys.argv[2], "w"))
+"""
+
+
+def part_big() -> dict:
+    n = 3 * 10**8
+    source = allan_log(DATA / "allan_3e8.parquet", n)
+    try:
+        ours = timed(gyrocomp("allan", source, "--out", DATA / "a_big.json"))
+        reference = timed([sys.executable, "-c", IN_MEMORY, str(source), str(DATA / "a_big_memory.json"), str(ROOT)])
+    finally:
+        source.unlink()
+    streamed = json.loads((DATA / "a_big.json").read_text())["series"][0]
+    memory = json.loads((DATA / "a_big_memory.json").read_text())
+    adev, ref = np.array(streamed["adev"]), np.array(memory["adev"])
+    return {
+        "n_samples": n,
+        "wall_s": ours[0], "cpu_s": ours[1], "peak_mb": ours[2],
+        "in_memory_wall_s": reference[0], "in_memory_peak_mb": reference[2],
+        "n_taus": len(adev),
+        "max_relative_difference": float(np.max(np.abs(adev - ref) / ref)),
+        "edf_max_relative_difference": float(np.max(np.abs(np.array(streamed["edf"]) - memory["edf"]) / np.array(memory["edf"]))),
+        "alpha_equal": streamed["alpha"] == memory["alpha"],
+    }
+
+
+def part_rate() -> dict:
+    sys.path.insert(0, str(ROOT))
+    from gyrocomp.pipeline.rate import CausalRate, causal_coefficients, temperature_rate
+    from gyrocomp.pipeline.settings import RateSettings
+
+    settings = RateSettings()
+    rng = np.random.default_rng(SEED)
+    n = 600_000
+    temperature = 25.0 + 20.0 * np.sin(np.arange(n) / FS_HZ / 1000.0) + rng.normal(0, 0.02, n)
+    start = time.perf_counter()
+    ours = temperature_rate(temperature, FS_HZ, settings, causal=True)
+    t_ours = time.perf_counter() - start
+    taps = causal_coefficients(settings, FS_HZ)
+    start = time.perf_counter()
+    primed = np.concatenate([np.full(len(taps) - 1, temperature[0]), temperature])
+    fir = np.convolve(primed, taps[::-1], mode="valid")
+    t_fir = time.perf_counter() - start
+    # 10^8 samples as a stream, then the last outputs against the exact slope of their windows
+    estimator = CausalRate(settings, FS_HZ)
+    w = len(taps)
+    total, chunk, last = 10**8, 1 << 20, None
+    tail = np.empty(0)
+    for begin in range(0, total, chunk):
+        i = np.arange(begin, min(begin + chunk, total))
+        block = 25.0 + 20.0 * np.sin(i / FS_HZ / 3000.0) + rng.normal(0, 0.02, len(i))
+        last = estimator(block)
+        tail = np.concatenate([tail, block])[-(w + 99) :]
+    k = np.arange(w, dtype=np.longdouble)
+    exact_taps = 12 * np.longdouble(FS_HZ) / (w * (np.longdouble(w) ** 2 - 1)) * (k - (w - 1) / 2)
+    exact = np.array([float(np.dot(exact_taps, tail[j : j + w].astype(np.longdouble))) for j in range(100)])
+    return {
+        "window_samples": w,
+        "n_samples": n,
+        "moment_s": t_ours,
+        "fir_s": t_fir,
+        "fir_over_moment": t_fir / t_ours,
+        "max_relative_difference_to_fir": float(np.max(np.abs(ours - fir)) / np.max(np.abs(fir))),
+        "after_1e8_max_relative_error": float(np.max(np.abs(last[-100:] - exact)) / np.max(np.abs(exact))),
+    }
+
+
+def main(parts: list[str]) -> int:
+    known = {"rate": part_rate, "compensate": part_compensate, "memory": part_memory, "stream": part_stream, "allantools": part_allantools, "big": part_big}
+    results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+    for name in parts or ["rate", "compensate", "memory", "stream"]:
+        print(f"-- {name}", flush=True)
+        results[name] = known[name]()
+        for key, value in results[name].items():
+            print(f"{key}: {value}")
+        RESULTS.parent.mkdir(parents=True, exist_ok=True)
+        RESULTS.write_text(json.dumps(results, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
