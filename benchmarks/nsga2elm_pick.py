@@ -97,13 +97,13 @@ def _normalise(X: np.ndarray, train: np.ndarray) -> np.ndarray:
 @functools.lru_cache(maxsize=1)
 def sample_problem():
     """(X, y, X_test, target_test) from sample_data/: rate against (T, dT/dt), 2000 block means."""
-    from gyrocomp import io
+    from gyrocomp import recordings
     from gyrocomp.pipeline.rate import model_inputs
     from gyrocomp.pipeline.train import _block_means
 
     out = []
     for name in ("oven_train", "oven_test"):
-        rec = io.read_recording(ROOT / "sample_data" / f"{name}.parquet")
+        rec = recordings.read_recording(ROOT / "sample_data" / f"{name}.parquet")
         out.append((model_inputs(rec.column("temperature"), rec.fs_hz), rec.column("rate")))
     (X, y), (X_test, y_test) = out
     X, X_test = _normalise(X, X), _normalise(X_test, X)
