@@ -3,18 +3,20 @@
 The header holds the model of :mod:`gyrocomp.export.plain` (physical units),
 and three steps per sample, the same as ``compensate --mode causal``:
 
-1. **dT/dt in O(1) per sample.** The causal Savitzky-Golay FIR
-   ``rate[t] = sum_k c_k T[t - W + 1 + k]`` has coefficients that are a
-   polynomial of degree p (the local fit's order) in the centred index
-   ``u_k = k - (W - 1) / 2``: ``c_k = sum_j a_j u_k^j``. So the estimate is
-   ``sum_j a_j M_j`` with the moments ``M_j = sum_k u_k^j x_k``, and when the
-   window slides by one sample (``x_0`` leaves, ``x_new`` enters) each moment
-   updates from the others by the binomial shift
-   ``M_j' = sum_{m<=j} C(j, m) (-1)^(j-m) (M_m - u_0^m x_0) + u_{W-1}^j x_new``:
-   ``(p + 1)^2`` operations whatever the window. The readings are taken
-   relative to the first one (``sum_k c_k = 0``, so the slope is unchanged),
-   which keeps the moments small; the window is primed with the first
-   reading, as the FIR is. A ring buffer of W readings supplies ``x_0``.
+1. **dT/dt in O(1) per sample**, the recursion of :mod:`gyrocomp.pipeline.rate`
+   (its module notes, :func:`~gyrocomp.pipeline.rate.moment_weights`): with
+   ``u_k = (k - kbar) / kbar`` the window's positions scaled to [-1, 1], the
+   estimate is ``sum_r a_r M_r`` over the moments ``M_r = sum_k u_k^r x_k``.
+   When the window slides by one sample (``x_0`` leaves, ``x_new`` enters)
+   every u drops by ``h = 1 / kbar``, so each moment updates from the others
+   by the binomial shift
+   ``M_r' = sum_{m<=r} C(r, m) (-h)^(r-m) (M_m - (-1)^m x_0) + x_new``:
+   ``(p + 1)^2`` operations whatever the window. A second set of moments
+   summed afresh over W samples replaces the recursive one every W samples,
+   so rounding cannot random-walk over a long run (as the Python estimator
+   re-sums its rows). The readings are taken relative to the first one
+   (``sum_k c_k = 0``), and the window is primed with the first reading, as
+   the FIR is. A ring buffer of W readings supplies ``x_0``.
 2. **Clamping** of temperature and dT/dt to the training ranges
    (``GYROCOMP_NO_CLAMP`` extrapolates, as ``--no-clamp``).
 3. **The segments' forward passes**, summed, subtracted from the rate.
@@ -38,47 +40,33 @@ __all__ = ["rate_moments", "recursive_rate", "c_header"]
 
 
 def rate_moments(window: int, polyorder: int, fs_hz: float) -> tuple[np.ndarray, float]:
-    """The causal FIR as a polynomial in the centred index: ``c_k = sum_j a_j u_k^j``.
+    """Moment weights a and kbar of the causal estimator (:func:`gyrocomp.pipeline.rate.moment_weights`)."""
+    from gyrocomp.pipeline.rate import moment_weights
 
-    The least-squares polynomial of order p through the window, in powers of
-    u, has coefficients ``(V^T V)^-1 V^T x`` (V the Vandermonde matrix of u);
-    its derivative at the newest sample ``u = (W - 1) / 2`` is
-    ``g^T (V^T V)^-1 V^T x`` with ``g_j = j u^(j-1)``, so
-    ``a = fs (V^T V)^-1 g``. ``V^T V`` holds sums of integer powers, exact in
-    double for the windows used here.
-
-    Returns
-    -------
-    a : ndarray, shape (p + 1,)
-        [1/s per unit u^j].
-    centre : float
-        (W - 1) / 2.
-    """
-    w, p = int(window), min(int(polyorder), int(window) - 1)
-    centre = (w - 1) / 2.0
-    u = np.arange(w) - centre
-    powers = np.array([[np.sum(u ** (i + j)) for j in range(p + 1)] for i in range(p + 1)])
-    g = np.array([j * centre ** (j - 1) if j else 0.0 for j in range(p + 1)])
-    return float(fs_hz) * np.linalg.solve(powers, g), centre
+    w = int(window)
+    return moment_weights(w, min(int(polyorder), w - 1), float(fs_hz), w - 1), (w - 1) / 2.0
 
 
 def recursive_rate(temperature_c, window: int, polyorder: int, fs_hz: float) -> np.ndarray:
-    """dT/dt by the moment recursion of the module notes: the C header's arithmetic, in numpy (a check of the FIR)."""
+    """dT/dt by the C header's recursion (module notes), in numpy: a check that it equals the FIR."""
     x_all = np.asarray(temperature_c, dtype=float)
-    a, centre = rate_moments(window, polyorder, fs_hz)
+    a, kbar = rate_moments(window, polyorder, fs_hz)
     w, p = int(window), len(a) - 1
-    shift = _shift_matrix(p)
-    ring = np.zeros(w)
-    moments = np.zeros(p + 1)
+    shift = _shift_matrix(p, 1.0 / kbar)
+    powers = np.arange(p + 1)
+    u_old, u_new = (-1.0) ** powers, np.ones(p + 1)
+    ring, moments, fresh = np.zeros(w), np.zeros(p + 1), np.zeros(p + 1)
     first = x_all[0]
     out = np.empty_like(x_all)
-    u0 = (-centre) ** np.arange(p + 1)
-    un = centre ** np.arange(p + 1)
     for i, value in enumerate(x_all):
         x = value - first
         oldest = ring[i % w]
-        moments = shift @ (moments - u0 * oldest) + un * x
+        moments = shift @ (moments - u_old * oldest) + u_new * x
         ring[i % w] = x
+        k = i % w
+        fresh += ((k - kbar) / kbar) ** powers * x
+        if k == w - 1:
+            moments, fresh = fresh, np.zeros(p + 1)
         out[i] = a @ moments
     return out
 
@@ -101,8 +89,8 @@ def c_header(plain: dict, vectors: dict | None = None, *, prefix: str = "gyrocom
         raise InputError(f"--prefix {prefix!r} is not a C identifier")
     est = plain["rate_estimator"]
     w = int(est["window_samples"])
-    a, centre = rate_moments(w, est["polyorder"], plain["fs_hz"])
-    u = np.arange(w) - centre
+    a, kbar = rate_moments(w, est["polyorder"], plain["fs_hz"])
+    u = (np.arange(w) - kbar) / kbar
     if not np.allclose(np.polynomial.polynomial.polyval(u, a), est["causal_coefficients"], rtol=1e-6, atol=1e-9 * np.max(np.abs(a))):
         raise InputError("rate estimator: the stored causal FIR is not the Savitzky-Golay slope of its window and order")
     p = len(a) - 1
@@ -126,6 +114,8 @@ def c_header(plain: dict, vectors: dict | None = None, *, prefix: str = "gyrocom
         "typedef struct {",
         f"    {P}_real ring[{U}_WINDOW]; /* readings relative to the first, oldest at head */",
         f"    {P}_real moment[{U}_ORDER + 1];",
+        f"    {P}_real fresh[{U}_ORDER + 1]; /* the same moments summed afresh since the last block start */",
+        "    long k; /* position of the newest reading in the fresh block */",
         f"    {P}_real first;",
         "    long head;",
         "    int started;",
@@ -134,9 +124,9 @@ def c_header(plain: dict, vectors: dict | None = None, *, prefix: str = "gyrocom
         f"}} {P}_state;",
         "",
         f"static const {P}_real {P}_rate_poly[{U}_ORDER + 1] = {{{_list(a)}}};",
-        f"static const {P}_real {P}_shift[{U}_ORDER + 1][{U}_ORDER + 1] = {{{', '.join('{' + _list(row) + '}' for row in _shift_matrix(p))}}};",
-        f"static const {P}_real {P}_u_old[{U}_ORDER + 1] = {{{_list((-centre) ** np.arange(p + 1))}}};",
-        f"static const {P}_real {P}_u_new[{U}_ORDER + 1] = {{{_list(centre ** np.arange(p + 1))}}};",
+        f"static const {P}_real {P}_shift[{U}_ORDER + 1][{U}_ORDER + 1] = {{{', '.join('{' + _list(row) + '}' for row in _shift_matrix(p, 1.0 / kbar))}}};",
+        f"static const {P}_real {P}_u_old[{U}_ORDER + 1] = {{{_list((-1.0) ** np.arange(p + 1))}}};",
+        f"#define {U}_KBAR (({P}_real){_num(kbar)})",
         "",
     ]
     needs = set()
@@ -153,13 +143,13 @@ def c_header(plain: dict, vectors: dict | None = None, *, prefix: str = "gyrocom
         f"static inline void {P}_init({P}_state *s) {{",
         "    int i;",
         f"    for (i = 0; i < {U}_WINDOW; ++i) s->ring[i] = 0;",
-        f"    for (i = 0; i <= {U}_ORDER; ++i) s->moment[i] = 0;",
-        "    s->first = 0; s->head = 0; s->started = 0; s->temperature_rate = 0; s->drift = 0;",
+        f"    for (i = 0; i <= {U}_ORDER; ++i) {{ s->moment[i] = 0; s->fresh[i] = 0; }}",
+        "    s->first = 0; s->head = 0; s->k = 0; s->started = 0; s->temperature_rate = 0; s->drift = 0;",
         "}",
         "",
         "/* One sample: temperature [degC] and measured rate [deg/s] in, compensated rate [deg/s] out. */",
         f"static inline {P}_real {P}_update({P}_state *s, {P}_real temperature_c, {P}_real rate_dps) {{",
-        f"    {P}_real x, oldest, next[{U}_ORDER + 1], slope = 0, t, r, drift = 0;",
+        f"    {P}_real x, oldest, next[{U}_ORDER + 1], slope = 0, t, r, drift = 0, u, power;",
         "    int j, m;",
         "    if (!s->started) { s->first = temperature_c; s->started = 1; }",
         "    x = temperature_c - s->first;",
@@ -167,7 +157,15 @@ def c_header(plain: dict, vectors: dict | None = None, *, prefix: str = "gyrocom
         f"    for (j = 0; j <= {U}_ORDER; ++j) {{",
         "        next[j] = 0;",
         f"        for (m = 0; m <= j; ++m) next[j] += {P}_shift[j][m] * (s->moment[m] - {P}_u_old[m] * oldest);",
-        f"        next[j] += {P}_u_new[j] * x;",
+        "        next[j] += x;",
+        "    }",
+        f"    u = (({P}_real)s->k - {U}_KBAR) / {U}_KBAR; power = 1;",
+        f"    for (j = 0; j <= {U}_ORDER; ++j) {{ s->fresh[j] += power * x; power *= u; }}",
+        f"    if (s->k == {U}_WINDOW - 1) {{ /* the fresh sums hold exactly this window: rounding restarts */",
+        f"        for (j = 0; j <= {U}_ORDER; ++j) {{ next[j] = s->fresh[j]; s->fresh[j] = 0; }}",
+        "        s->k = 0;",
+        "    } else {",
+        "        s->k += 1;",
         "    }",
         f"    for (j = 0; j <= {U}_ORDER; ++j) {{ s->moment[j] = next[j]; slope += {P}_rate_poly[j] * next[j]; }}",
         "    s->ring[s->head] = x;",
@@ -204,9 +202,9 @@ def c_header(plain: dict, vectors: dict | None = None, *, prefix: str = "gyrocom
     return "\n".join(out)
 
 
-def _shift_matrix(p: int) -> np.ndarray:
-    """S[j, m] = C(j, m) (-1)^(j - m): moments of u about u - 1."""
-    return np.array([[comb(j, m) * (-1) ** (j - m) if m <= j else 0 for m in range(p + 1)] for j in range(p + 1)], dtype=float)
+def _shift_matrix(p: int, h: float) -> np.ndarray:
+    """S[j, m] = C(j, m) (-h)^(j - m): the moments of u expressed about u - h."""
+    return np.array([[comb(j, m) * (-h) ** (j - m) if m <= j else 0.0 for m in range(p + 1)] for j in range(p + 1)], dtype=float)
 
 
 def _num(value) -> str:

@@ -81,6 +81,7 @@ def plain_model(model, *, centred: bool = False) -> dict:
             "window_samples": int(estimator["window_samples"]),
             "polyorder": int(estimator["polyorder"]),
             "causal_coefficients": [float(c) for c in estimator["causal_coefficients"]],
+            "recursion": estimator.get("recursion"),
         },
         "clamp": {"temperature_c": [t_lo, t_hi], "temperature_rate_c_per_s": [r_lo, r_hi]},
         "input_basis": {"centre": centre.tolist(), "half_range": half.tolist(), "meaning": "segments take z = (x - centre) / half_range"},
