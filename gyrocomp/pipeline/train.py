@@ -283,7 +283,7 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
         Xn = (X - offset) / scale
         y_offset = float(np.mean(y))
         y_scale = float(np.std(y)) or 1.0
-        Xb, yb = _block_means(Xn, (y - y_offset) / y_scale, model_table.max_samples)
+        Xb, yb = _block_means(Xn, (y - y_offset) / y_scale, model_table.max_samples, bounds)
         learner = spec.build(seed).fit(Xb, yb)
         prediction = learner.predict(Xn) * y_scale + y_offset
         fitted[segment] = {
@@ -340,13 +340,18 @@ def _check_rank(lo: np.ndarray, hi: np.ndarray, model_table, name: str) -> None:
             )
 
 
-def _block_means(X: np.ndarray, y: np.ndarray, max_samples: int) -> tuple[np.ndarray, np.ndarray]:
-    """Means of consecutive blocks of ceil(n / max_samples) samples (a partial last block is kept)."""
+def _block_means(X: np.ndarray, y: np.ndarray, max_samples: int, bounds=None) -> tuple[np.ndarray, np.ndarray]:
+    """Means of consecutive blocks of ceil(n / max_samples) samples within each gap-free range of `bounds`.
+
+    A block never spans a gap: each range starts a block, and its partial
+    last block is kept. `bounds` ``None`` is one range.
+    """
     n = len(y)
     if max_samples == 0 or n <= max_samples:
         return X, y
     k = -(-n // max_samples)
-    starts = np.arange(0, n, k)
+    ranges = [(0, n)] if bounds is None else [b.indices(n)[:2] for b in bounds]
+    starts = np.concatenate([np.arange(lo, hi, k) for lo, hi in ranges])
     counts = np.diff(np.append(starts, n))
     Xb = np.add.reduceat(X, starts, axis=0) / counts[:, None]
     yb = np.add.reduceat(y, starts) / counts

@@ -119,3 +119,15 @@ def test_out_of_range_recording_warns_by_how_much(make_recording, trained):
         _, summary = compensate(hot, load_model(trained["elm"]), "causal")
     assert summary["ranges"]["temperature_c"]["above_by"] == pytest.approx(9.75, abs=0.3)
     assert summary["ranges"]["temperature_c"]["share_outside"] > 0.1
+
+
+def test_block_means_never_span_a_gap():
+    """Training on block means (``[model] max_samples``): each gap-free range starts a block of its own."""
+    from gyrocomp.pipeline.train import _block_means
+
+    X = np.arange(24.0).reshape(12, 2)
+    y = np.arange(12.0)
+    Xb, yb = _block_means(X, y, 4, [slice(0, 5), slice(5, 12)])  # blocks of ceil(12 / 4) = 3 samples
+    assert_array_equal(yb, [1.0, 3.5, 6.0, 9.0, 11.0])  # rows 0-2, 3-4 | 5-7, 8-10, 11
+    assert_array_equal(Xb[:, 0], 2 * yb)
+    assert_array_equal(_block_means(X, y, 4)[1], [1.0, 4.0, 7.0, 10.0])
