@@ -227,3 +227,31 @@ def test_the_command_line_says_what_resample_filled(tmp_path):
     note = "resampled onto a uniform 0.5 s grid: 1 gaps filled by linear interpolation, the longest 200.5 s"
     assert f"gyrocomp: note: {path}: {note}" in result.stderr
     assert json.loads(out.read_text())["inputs"][0]["notes"] == [note]
+
+
+def test_command_line_time_bases_and_compression(tmp_path):
+    """µs stamps: exit 2 naming µs, nothing written; with --time-unit us, and as .csv.gz with ISO datetimes, read right."""
+    from typer.testing import CliRunner
+
+    from gyrocomp.cli import app
+
+    n, fs = 3000, 100.0
+    rng = np.random.default_rng(5)
+    rate = rng.normal(0.0, 0.1, n)
+    frame = pd.DataFrame({"timestamp": 1_000_000 + np.arange(n) * 10_000, "rate": rate})
+    path = tmp_path / "px4.csv"
+    frame.to_csv(path, index=False)
+    out = tmp_path / "allan.json"
+    refused = CliRunner().invoke(app, ["allan", str(path), "--time-col", "timestamp", "--out", str(out)])
+    assert refused.exit_code == 2
+    assert refused.stderr.count("\n") == 1 and "microseconds (µs, us): pass --time-unit us" in refused.stderr
+    assert not out.exists()
+    ok = CliRunner().invoke(app, ["allan", str(path), "--time-col", "timestamp", "--time-unit", "us", "--out", str(out), "-q"])
+    assert ok.exit_code == 0, ok.output
+    fs_us = pd.read_json(out, typ="series")["series"][0]["fs_hz"]
+    iso = tmp_path / "lab.csv.gz"
+    stamps = pd.Timestamp("2024-01-01T00:00:00Z") + pd.to_timedelta(np.arange(n) * 10, unit="ms")
+    pd.DataFrame({"time": [s.isoformat() for s in stamps], "rate": rate}).to_csv(iso, index=False)
+    ok = CliRunner().invoke(app, ["allan", str(iso), "--out", str(out), "-q"])
+    assert ok.exit_code == 0, ok.output
+    assert fs_us == pd.read_json(out, typ="series")["series"][0]["fs_hz"] == pytest.approx(fs)
