@@ -171,9 +171,41 @@ class ChunkReader:
 
 
 def supports(path: str | os.PathLike, columns: ColumnSpec = ColumnSpec()) -> bool:
-    """Whether :func:`read_chunks` reads this recording: CSV or Parquet, time in seconds, no duplicates to merge."""
+    """Whether :func:`read_chunks` reads this recording: CSV or Parquet, time in seconds, no duplicates to merge.
+
+    Without a time unit, a file whose time column holds text (ISO datetimes,
+    which :func:`gyrocomp.recordings.read_recording` parses) is read whole:
+    its first row is looked at.
+    """
     name = "-" if str(path) == "-" else os.fspath(path)
-    return recordings._kind(name) in ("csv", "parquet") and columns.time_unit in (None, "s") and columns.dedupe is None
+    kind = recordings._kind(name)
+    if kind not in ("csv", "parquet") or columns.time_unit not in (None, "s") or columns.dedupe is not None:
+        return False
+    return columns.time_unit == "s" or name == "-" or not _text_time(name, kind, columns)
+
+
+def _text_time(name: str, kind: str, columns: ColumnSpec) -> bool:
+    """Whether the time column's first value is text (False when that cannot be read: the reader will say why)."""
+    if kind == "parquet":  # the schema says it, without pandas
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        try:
+            stored = pq.read_schema(name).field(columns.time).type
+        except (KeyError, pa.ArrowInvalid, OSError):
+            return False
+        return not (pa.types.is_integer(stored) or pa.types.is_floating(stored))
+    import pandas as pd
+
+    sep = recordings._SEPARATOR_WORDS.get(columns.sep, columns.sep)
+    try:
+        head = pd.read_csv(
+            name, sep=sep, decimal=columns.decimal, comment="#", skipinitialspace=True, nrows=1,
+            usecols=[columns.time], engine="python" if sep == r"\s+" else "c",
+        )
+    except (ValueError, OSError, EOFError, pd.errors.ParserError, pd.errors.EmptyDataError):
+        return False
+    return not pd.api.types.is_numeric_dtype(head[columns.time].dtype)
 
 
 def read_chunks(

@@ -40,18 +40,24 @@ def test_log_lines_at_most_every_ten_seconds():
         now[0] = t
         lines(done, 8)
     assert console.export_text().splitlines() == [
-        "gyrocomp: diagnose: 0/8 (0%), 0 s",
         "gyrocomp: diagnose: 3/8 (38%), 10 s",
         "gyrocomp: diagnose: 6/8 (75%), 21 s",
     ]
 
 
-def test_progress_lines_when_stderr_is_not_a_terminal(tmp_path):
+def test_progress_lines_when_stderr_is_not_a_terminal(tmp_path, monkeypatch):
+    import gyrocomp.cli._app as cli_app
+
     out = tmp_path / "sim.parquet"
+    fast = runner.invoke(app, ["simulate", "--fs", "0.2", "--out", str(out)])
+    assert fast.exit_code == 0, fast.output
+    assert "\x1b[" not in fast.stderr  # no bar, no escape codes in a log
+    monkeypatch.setattr(cli_app, "LOG_EVERY_S", 0.0)  # every update a line
     result = runner.invoke(app, ["simulate", "--fs", "0.2", "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert "gyrocomp: simulating: started, 0 s" in result.stderr
-    assert "\x1b[" not in result.stderr  # no bar, no escape codes in a log
+    lines = result.stderr.splitlines()
+    assert lines and all(line.startswith("gyrocomp: simulating: ") for line in lines)
+    assert lines[-1].startswith("gyrocomp: simulating: 9/9 (100%), ")
     quiet = runner.invoke(app, ["simulate", "--fs", "0.2", "--out", str(out), "--quiet"])
     assert quiet.exit_code == 0 and quiet.stderr == "" and quiet.stdout == ""
 

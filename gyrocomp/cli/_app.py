@@ -200,9 +200,7 @@ def progress(ctx: typer.Context, description: str, out: Path | str | None = None
     st = state(ctx)
     console = Console(stderr=True, quiet=st.quiet)
     if not console.is_terminal:
-        lines = LogLines(console, description)
-        lines(0, 0)  # the first line at once: the log shows the command started
-        yield lines
+        yield LogLines(console, description, every_s=LOG_EVERY_S)
         return
     bar = Progress(
         TextColumn("{task.description}"),
@@ -227,7 +225,10 @@ LOG_EVERY_S = 10.0
 
 
 class LogLines:
-    """Progress as plain lines, at most one every `every_s` seconds (the first at once).
+    """Progress as plain lines, at most one every `every_s` seconds.
+
+    The first comes `every_s` after the start at the earliest, so a command
+    that fails at once still writes one line only, its error.
 
     Parameters
     ----------
@@ -247,17 +248,17 @@ class LogLines:
         self.every_s = every_s
         self.clock = clock
         self.start = clock()
-        self.last: float | None = None
+        self.last = self.start
 
     def __call__(self, done: int, total: int, description: str | None = None) -> None:
         if description is not None:
             self.description = description
         now = self.clock()
-        if self.last is not None and now - self.last < self.every_s:
+        if now - self.last < self.every_s:
             return
         self.last = now
         share = f" ({100.0 * done / total:.0f}%)" if total else ""
-        count = f"{done}/{total}" if total else (f"{done}" if done else "started")
+        count = f"{done}/{total}" if total else f"{done}"
         self.console.print(f"gyrocomp: {self.description}: {count}{share}, {now - self.start:.0f} s", markup=False, highlight=False, soft_wrap=True)
 
 
