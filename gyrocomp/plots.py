@@ -174,10 +174,10 @@ def allan_figure(series: Sequence, *, unit: str = "deg/s"):
     Notes
     -----
     The guides are lines of slope -1/2, 0 and +1/2 through the first
-    series' read-offs (angle random walk N at tau = 1 s, bias instability
-    B at the curve's minimum, rate random walk K at tau = 3 s), or through
-    its curve's first point, minimum and last point when a term has no
-    read-off. Each series marks its own read-off points (triangle down N,
+    read-off of each term among the series (angle random walk N at tau = 1 s,
+    bias instability B at the curve's minimum, rate random walk K at
+    tau = 3 s), or through the first curve's first point, minimum and last
+    point when no series has that read-off. Each series marks its own read-off points (triangle down N,
     circle B, triangle up K) and gives their values in the legend, where
     labels of several series cannot collide.
     """
@@ -198,7 +198,12 @@ def allan_figure(series: Sequence, *, unit: str = "deg/s"):
         label = s.name if s.column == "rate" else f"{s.name} [{s.column}]"
         handles.append(Line2D([], [], color=colour, label=f"{label}: {text}"))
     if series:
-        _slope_guides(ax, series[0])
+        low = min(float(np.min(np.asarray(x.adev_lo)[np.asarray(x.adev_lo) > 0], initial=np.inf)) for x in series)
+        low = min([low] + [y for x in series for _, y in _readoff_points(x)[0].values() if y > 0])  # every marked point shows
+        high = max(float(np.max(x.adev_hi)) for x in series)
+        _slope_guides(ax, series)
+        if np.isfinite(low) and high > 0:
+            ax.set_ylim(low / 2.0, high * 2.0)  # the guides do not stretch the range beyond the curves and their points
     level = series[0].confidence if series else 0.683
     ax.set_xlabel("averaging time tau [s]")
     ax.set_ylabel(f"overlapping Allan deviation [{unit}]")
@@ -228,17 +233,16 @@ def _readoff_points(s) -> tuple[dict, str]:
     return points, ", ".join(parts)
 
 
-def _slope_guides(ax, s) -> None:
-    tau, adev = np.asarray(s.tau_s), np.asarray(s.adev)
-    points, _ = _readoff_points(s)
+def _slope_guides(ax, series) -> None:
+    """Lines of slope -1/2, 0, +1/2 through the first read-off of that term among the series, else through the first curve."""
+    first = series[0]
+    tau, adev = np.asarray(first.tau_s), np.asarray(first.adev)
     i_min = int(np.argmin(adev))
-    anchors = {
-        -0.5: points.get("arw", (tau[0], adev[0])),
-        0.0: points.get("bias_instability", (tau[i_min], adev[i_min])),
-        0.5: points.get("rrw", (tau[-1], adev[-1])),
-    }
-    span = np.geomspace(tau[0], tau[-1], 50)
-    for slope, (x0, y0) in anchors.items():
+    fallback = {"arw": (tau[0], adev[0]), "bias_instability": (tau[i_min], adev[i_min]), "rrw": (tau[-1], adev[-1])}
+    points = [_readoff_points(s)[0] for s in series]
+    span = np.geomspace(min(float(s.tau_s[0]) for s in series), max(float(s.tau_s[-1]) for s in series), 50)
+    for key, slope in (("arw", -0.5), ("bias_instability", 0.0), ("rrw", 0.5)):
+        x0, y0 = next((p[key] for p in points if key in p), fallback[key])
         y = y0 * (span / x0) ** slope
         ax.loglog(span, y, ":", color="0.4", linewidth=0.9)
         j = {-0.5: 2, 0.0: len(span) // 2, 0.5: -6}[slope]

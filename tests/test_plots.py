@@ -115,3 +115,15 @@ def test_allan_figure_has_guides_readoffs_and_one_colour_per_series():
     # the N point sits on the read-off: sigma(1 s) = N / 60
     n_point = next(line for line in ax.get_lines() if line.get_marker() == "v")
     assert n_point.get_ydata()[0] == pytest.approx(series[0].terms["arw"]["readoff"] / 60)
+
+
+def test_a_plot_there_already_is_overwritten_not_taken_for_an_input(sample, tmp_path):
+    """Re-running with the same --plot path replaces the PNG (it is an output, not an input to protect)."""
+    png = tmp_path / "allan.png"
+    args = ["allan", str(sample / "oven_test.parquet"), "--out", str(tmp_path / "a.json"), "--plot", str(png)]
+    for _ in range(2):
+        result = CliRunner().invoke(app, args)
+        assert result.exit_code == 0, result.output
+    assert png.read_bytes()[:8] == PNG
+    same = CliRunner().invoke(app, ["compensate", str(sample / "oven_test.parquet"), str(tmp_path / "a.json"), "--out", str(tmp_path / "c.parquet"), "--plot", str(sample / "oven_test.parquet")])
+    assert same.exit_code == 2 and "would overwrite the input" in same.output

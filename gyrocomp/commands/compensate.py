@@ -45,7 +45,7 @@ class Options:
 
 def written(out, options) -> list:
     """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
-    return [out] if str(out) == "-" else [out, Path(out).with_suffix(".json")]
+    return ([out] if str(out) == "-" else [out, Path(out).with_suffix(".json")]) + [options.plot]
 
 
 @guarded(written)

@@ -46,7 +46,7 @@ class Options:
 
 def written(out, options) -> list:
     """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
-    return [out]
+    return [out, options.plot]
 
 
 @guarded(written)
