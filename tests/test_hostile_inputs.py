@@ -79,14 +79,19 @@ def _snapshot(folder: Path) -> dict:
 @pytest.mark.parametrize("argv, code, message", [c[1:] for c in CASES], ids=[c[0] for c in CASES])
 def test_hostile_case(tmp_path, monkeypatch, argv, code, message):
     _setup(tmp_path)
-    monkeypatch.chdir(tmp_path)
-    before = _snapshot(tmp_path)
+    _check_case(tmp_path, monkeypatch, argv, code, message)
+
+
+def _check_case(folder: Path, monkeypatch, argv, code, message) -> None:
+    """Run `argv` in `folder`: exit `code`, one stderr line matching `message`, every file unchanged, none new."""
+    monkeypatch.chdir(folder)
+    before = _snapshot(folder)
     result = CliRunner().invoke(app, argv)
     assert result.exit_code == code, result.output
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("gyrocomp: "), lines
     assert re.search(message, lines[0]), lines[0]
-    assert _snapshot(tmp_path) == before
+    assert _snapshot(folder) == before
 
 
 def test_every_stage_is_guarded():
@@ -154,3 +159,53 @@ def test_config_typos_are_refused(tmp_path, monkeypatch, argv, message):
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and re.search(message, lines[0]), lines
     assert _snapshot(tmp_path) == before
+
+
+def _constant_recording(path: Path, n: int = 600) -> None:
+    t = np.arange(n, dtype=float)
+    pd.DataFrame({"time": t, "rate": np.full(n, 0.5), "temperature": 20.0 + t / 60.0}).to_csv(path, index=False)
+
+
+SETTING_FILES = {
+    "bias.toml": "[allan]\nbias_factor = -1\n",
+    "arw.toml": "[allan]\narw_tau_s = 0\n",
+    "taus.toml": "[allan]\ntaus = [1.0, 10.0]\n",
+    "diag.toml": "[diagnose]\ntau_grid_points = 0\n",
+}
+
+SETTING_CASES = [
+    # (case id, argv, exit code, the one line must match); each names the file or option and the setting
+    ("allan-bias-factor-negative", ["allan", "x.parquet", "--config", "bias.toml", "--out", "a.json"], 2, r"bias\.toml \[allan\]: allan bias_factor = -1\.0; must be a finite number > 0"),
+    ("allan-arw-tau-zero", ["allan", "x.parquet", "--config", "arw.toml", "--out", "a.json"], 2, r"arw\.toml \[allan\]: allan arw_tau_s = 0\.0"),
+    ("allan-max-arw-nan", ["allan", "x.parquet", "--max-arw", "nan", "--out", "a.json"], 2, r"--max-arw nan: must be a finite number >= 0"),
+    ("allan-constant-rate", ["allan", "const.csv", "--out", "a.json"], 2, r"const\.csv `rate`: Allan deviation 0 at tau = 1 s: the series does not vary"),
+    ("diagnose-tau-grid-zero", ["diagnose", "x.parquet", "--config", "diag.toml", "--out", "d.json"], 2, r"diag\.toml \[diagnose\]: diagnose\.tau_grid_points = 0"),
+    ("simulate-seed-negative", ["simulate", "--seed", "-1", "--out", "s.parquet"], 2, r"run\.seed \(--seed\) = -1 must be an integer >= 0"),
+    ("simulate-fs-huge", ["simulate", "--fs", "1e9", "--out", "s.parquet"], 2, r"run\.fs_hz \(--fs\) = 1000000000\.0 must be in \[0\.01, 100000\] Hz"),
+    ("train-rate-window-beyond-recording", ["train", "x.parquet", "--config", "polynomial", "--set", "rate.window_s=1e9", "--out", "m.json"], 2, r"x\.parquet: \[rate\] window_s = 1e\+09 s is longer than the recording \(600 s\)"),
+    ("decompose-ensemble-huge", ["decompose", "x.parquet", "--config", "iceemdan-se-tfpf-nsga2elm", "--set", "ensemble=1000000000", "--out", "c.parquet"], 2, r"ensemble = 1000000000; must be in 1\.\.10000"),
+]
+
+
+@pytest.mark.parametrize("argv, code, message", [c[1:] for c in SETTING_CASES], ids=[c[0] for c in SETTING_CASES])
+def test_bad_setting_is_refused(tmp_path, monkeypatch, argv, code, message):
+    """Every setting has a validated type and range; the error names the setting (issue 21 items 8, 9)."""
+    _setup(tmp_path)
+    _constant_recording(tmp_path / "const.csv")
+    for name, text in SETTING_FILES.items():
+        (tmp_path / name).write_text(text)
+    _check_case(tmp_path, monkeypatch, argv, code, message)
+
+
+def test_allan_taus_list_form_is_read(tmp_path):
+    """The documented list form of ``taus`` gives exactly those taus (in seconds)."""
+    from gyrocomp.allan import get_config
+
+    (tmp_path / "taus.toml").write_text(SETTING_FILES["taus.toml"])
+    x = _recording(tmp_path / "x.parquet")
+    result = CliRunner().invoke(app, ["allan", str(x), "--config", str(tmp_path / "taus.toml"), "--out", str(tmp_path / "a.json")])
+    assert result.exit_code == 0, result.output
+    import json
+
+    assert json.loads((tmp_path / "a.json").read_text())["series"][0]["tau_s"] == [1.0, 10.0]
+    assert get_config(tmp_path / "taus.toml").taus == "1.0,10.0"

@@ -41,7 +41,8 @@ class AllanConfig:
     Attributes
     ----------
     taus : str
-        ``"octave"``, ``"decade"``, ``"all"`` or a comma-separated list of tau [s].
+        ``"octave"``, ``"decade"``, ``"all"`` or a comma-separated list of tau [s]
+        (a TOML list of seconds is joined into this form by :func:`get_config`).
     confidence : float
         Two-sided confidence level of ``adev_lo``/``adev_hi`` (0.683 = 1 sigma).
     min_acf_points : int
@@ -78,6 +79,11 @@ class AllanConfig:
     max_phase_in_memory: int = 20_000_000
 
     def __post_init__(self):
+        positive = ("model_error", "identify_sigmas", "arw_tau_s", "rrw_tau_s", "slope_tolerance", "bias_factor")
+        for name in positive:
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0):
+                raise InputError(f"allan {name} = {value!r}; must be a finite number > 0")
         if not 0.0 < self.confidence < 1.0:
             raise InputError(f"allan confidence = {self.confidence!r}; must be in (0, 1)")
         if self.min_acf_points < 3:
@@ -90,7 +96,10 @@ def get_config(path: str | os.PathLike = "allan") -> AllanConfig:
     """Read the ``[allan]`` table of a TOML config (default ``configs/allan.toml``)."""
     from gyrocomp.config import bind, check_tables, load_config
 
-    return bind(AllanConfig, check_tables(load_config(path), ("allan",), str(path)).get("allan"), f"{path} [allan]")
+    table = dict(check_tables(load_config(path), ("allan",), str(path)).get("allan") or {})
+    if isinstance(table.get("taus"), list):  # the documented list form: seconds, as --taus takes them
+        table["taus"] = ",".join(repr(t) for t in table["taus"])
+    return bind(AllanConfig, table, f"{path} [allan]")
 
 
 @dataclasses.dataclass
@@ -266,6 +275,12 @@ def _series(phase: Phase, fs_hz: float, taus, name: str, column: str, settings: 
     n = len(phase) - 2 * m
     avar = second_difference_sums(phase, m) / (2.0 * n * m.astype(float) ** 2)
     adev = np.sqrt(avar)
+    if not (adev > 0).all():
+        tau0 = m[np.flatnonzero(~(adev > 0))[0]] / fs_hz
+        raise InputError(
+            f"{name} `{column}`: Allan deviation 0 at tau = {tau0:g} s: the series does not vary "
+            "(a stuck sensor or a constant column?); no noise to identify"
+        )
     alpha = np.array([noise_id(phase, int(k), settings.min_acf_points) for k in m], dtype=int)
     edf = np.array([edf_oadev(int(a), int(k), n_samples + 1) for a, k in zip(alpha, m)])
     lo, hi = chi2_interval(adev, edf, settings.confidence)

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from pathlib import Path
 from typing import Optional, Sequence
 
 from gyrocomp.commands import guarded
+from gyrocomp.errors import InputError
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files", "check"]
@@ -45,6 +47,12 @@ class Options:
     max_rrw: Optional[float] = None
     columns: ColumnSpec = ColumnSpec()
     resample: bool = False
+
+    def __post_init__(self):
+        for name in ("max_arw", "max_bias_instability", "max_rrw"):
+            bound = getattr(self, name)
+            if bound is not None and not (math.isfinite(bound) and bound >= 0):
+                raise InputError(f"--{name.replace('_', '-')} {bound!r}: must be a finite number >= 0 (a NaN bound never fires)")
 
 
 def written(out, options) -> list:

@@ -34,6 +34,10 @@ __all__ = [
 
 METHODS = ("lcd", "iceemdan", "ceemdan", "emd")
 
+MAX_ENSEMBLE = 10_000
+"""Most noise realisations of iceemdan/ceemdan: 20x the largest NR the papers use (500,
+Colominas et al. 2014); beyond it a run takes days, so a larger value is a typo."""
+
 
 @dataclasses.dataclass(frozen=True)
 class DecomposeSettings:
@@ -85,8 +89,8 @@ class DecomposeSettings:
     def __post_init__(self):
         if self.method not in METHODS:
             raise InputError(f"method = {self.method!r}; choose one of {', '.join(METHODS)}")
-        if self.ensemble < 1:
-            raise InputError(f"ensemble = {self.ensemble}; must be at least 1")
+        if not 1 <= self.ensemble <= MAX_ENSEMBLE:
+            raise InputError(f"ensemble = {self.ensemble!r}; must be in 1..{MAX_ENSEMBLE} (each realisation is a full EMD)")
         if not self.noise_strength > 0:
             raise InputError(f"noise_strength = {self.noise_strength}; must be positive")
         if not 0.0 < self.q < 1.0:

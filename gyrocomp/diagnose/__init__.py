@@ -93,6 +93,8 @@ class DiagnoseSettings:
             raise InputError(f"diagnose.poly_degree = {self.poly_degree!r}: the baseline is at most cubic (0..3)")
         if not 0.0 < self.detection_power < 1.0:
             raise InputError(f"diagnose.detection_power = {self.detection_power!r} must be between 0 and 1")
+        if self.tau_grid_points < 2:
+            raise InputError(f"diagnose.tau_grid_points = {self.tau_grid_points!r} must be at least 2 (a grid from lo to hi)")
         if self.max_blocks < 16:
             raise InputError(f"diagnose.max_blocks = {self.max_blocks!r} must be at least 16")
 

@@ -270,6 +270,12 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
     rate_cfg = rate_settings(config, source)
     pipeline = pipeline_settings(config, source)
     model_table = model_settings(config, source, parallel=pipeline.parallel)
+    duration = len(temperature) / fs_hz
+    if rate_cfg.window_s > duration:
+        raise InputError(
+            f"{', '.join(record['name'] for record in inputs) or source}: [rate] window_s = {rate_cfg.window_s:g} s "
+            f"is longer than the recording ({duration:g} s); the temperature rate needs a window within it"
+        )
     X = segment_inputs(temperature, fs_hz, rate_cfg, bounds)
     lo, hi = X.min(axis=0), X.max(axis=0)
     _check_rank(lo, hi, model_table, ", ".join(record["name"] for record in inputs) or source)

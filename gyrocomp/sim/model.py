@@ -201,8 +201,16 @@ class RunSettings:
     truth_columns: bool = False
 
     def __post_init__(self):
-        if not self.fs_hz > 0:
-            raise InputError(f"run.fs_hz = {self.fs_hz!r} must be > 0")
+        from gyrocomp.recordings import TimeLimits
+
+        limits = TimeLimits()
+        if not limits.min_fs_hz <= self.fs_hz <= limits.max_fs_hz:
+            raise InputError(
+                f"run.fs_hz (--fs) = {self.fs_hz!r} must be in [{limits.min_fs_hz:g}, {limits.max_fs_hz:g}] Hz, "
+                "the sample rates the recording reader accepts (configs/recordings.toml [time])"
+            )
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise InputError(f"run.seed (--seed) = {self.seed!r} must be an integer >= 0")
         if not self.duration_s >= 0:
             raise InputError(f"run.duration_s = {self.duration_s!r} must be >= 0 (0: the profile's length)")
 
