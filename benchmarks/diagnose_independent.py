@@ -203,6 +203,8 @@ def markdown(summary, results, seed):
     """The summary, the per-case verdicts and the confusion matrix as markdown."""
     cats = summary["categories"]
     out = [f"# diagnose on the independent generator, seed {seed}", ""]
+    if not summary.get("complete", True):
+        out += [f"**Interrupted run: {summary['pairs']} of {summary['planned_pairs']} planned pairs.**", ""]
     if not summary["unexplained_in_reports"]:
         out += ["The reports have no `unexplained` object yet: out-of-vocabulary cases count as not flagged.", ""]
     out += ["| category | cases | exactly right | goal |", "|---|---|---|---|"]
@@ -243,13 +245,17 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=gen.TUNING_SEED)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--twins", type=int, default=1, help="cases drawn at both 2 Hz and 100 Hz (timed back to back)")
-    parser.add_argument("--only", nargs="*", help="effect/form keys (or categories) to run; default all")
+    parser.add_argument("--only", nargs="*", help="effect/form keys, categories or `twins` to run; default all")
     parser.add_argument("--resume", action="store_true", help="keep the cases already in this seed's progress file")
+    parser.add_argument("--score-only", action="store_true", help="score the progress file as it stands (an interrupted run), run nothing")
     args = parser.parse_args(argv)
     plan = gen.case_plan(args.seed, speed_twins=args.twins)
     if args.only:
-        plan = [c for c in plan if c["key"] in args.only or c["category"] in args.only]
-    singles = [[c] for c in plan if "twin" not in c]
+        plan = [c for c in plan if c["key"] in args.only or c["category"] in args.only or ("twin" in c and "twins" in args.only)]
+    rank = {}
+    for c in plan:  # interleave the categories, so that an interrupted run has covered each
+        rank[c["index"]] = (sum(d["category"] == c["category"] and d["index"] < c["index"] for d in plan), CATEGORIES.index(c["category"]))
+    singles = [[c] for c in sorted(plan, key=lambda c: rank[c["index"]]) if "twin" not in c]
     twins = {}
     for c in plan:
         if "twin" in c:
@@ -258,11 +264,14 @@ def main(argv=None):
     suffix = "" if not args.only else "-partial"
     progress = DATA / f"seed{args.seed}{suffix}-progress.jsonl"
     progress.parent.mkdir(parents=True, exist_ok=True)
-    done = [json.loads(line) for line in progress.read_text().splitlines()] if args.resume and progress.exists() else []
+    keep = args.resume or args.score_only
+    done = [json.loads(line) for line in progress.read_text().splitlines()] if keep and progress.exists() else []
     seen = {(r["index"], r["fs_hz"]) for r in done}
     tasks = [t for t in tasks if any((c["index"], c["fs_hz"]) not in seen for c in t)]
     results = [r for r in done if any(r["index"] == c["index"] and r["fs_hz"] == c["fs_hz"] for c in plan)]
-    if not args.resume:
+    if args.score_only:
+        tasks = []
+    elif not args.resume:
         progress.write_text("")
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
@@ -276,7 +285,8 @@ def main(argv=None):
     results.sort(key=lambda r: (r["index"], r["fs_hz"]))
     wall = time.perf_counter() - t0
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    summary = score(results) | {"seed": args.seed, "workers": args.workers, "wall_s": wall, "commit": commit}
+    summary = score(results) | {"seed": args.seed, "workers": args.workers, "wall_s": wall, "commit": commit,
+                                "planned_pairs": len(plan), "complete": len(results) == len(plan)}
     text = markdown(summary, results, args.seed)
     print(text)
     print(f"wall time {wall:.0f} s on {args.workers} workers")
