@@ -107,10 +107,12 @@ def check_paths(inputs: Sequence[Any], options: Any, outputs: Sequence[Any]) -> 
 
     written = [p for p in outputs if p is not None and str(p) != "-"]
     reads = [p for p in inputs if str(p) != "-"]
-    outputs = {_identity(p) for p in written if not isinstance(p, Folder)}
     for field in dataclasses.fields(options):
-        for value in _paths_in(getattr(options, field.name)):
-            if _identity(value) not in outputs and os.path.isfile(value):  # an output option (a --plot there already) is no input
+        option = getattr(options, field.name)
+        if any(option is p for p in outputs):  # an output option (a --plot there already) is no input
+            continue
+        for value in _paths_in(option):
+            if os.path.isfile(value):
                 reads.append(value)
     seen: dict = {}
     for path in written:
