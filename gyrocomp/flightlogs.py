@@ -92,8 +92,13 @@ def read_log(name: str, kind: str, spec: ColumnSpec) -> tuple[dict[str, np.ndarr
     ------
     InputError
         Unreadable log, no such stream or column (the message lists them),
-        or columns of streams with separate time stamps.
+        columns of streams with separate time stamps, or a unit option
+        (the format fixes the units).
     """
+    options = (("--time-unit", spec.time_unit, None), ("--rate-unit", spec.rate_unit, "deg/s"), ("--temp-unit", spec.temperature_unit, "degC"))
+    given = [option for option, value, default in options if value != default]
+    if given:
+        raise InputError(f"{name}: a log's units come from its format (rad/s, m/s^2, degC, us); drop {', '.join(given)}")
     streams = _read_ulog(name) if kind == "ulog" else _read_dataflash(name)
     if not streams:
         raise InputError(f"{name}: no {'sensor_gyro or sensor_accel topic' if kind == 'ulog' else 'IMU message'} in the log")

@@ -50,6 +50,8 @@ def test_px4_defaults_and_refusals():
         read_recording(PX4_SAMPLE, ColumnSpec(rate="sensor_*_0_x"))
     with pytest.raises(InputError, match="no column matches 'gyro'; the log has sensor_gyro_0_x"):
         read_recording(PX4_SAMPLE, ColumnSpec(rate="gyro"))
+    with pytest.raises(InputError, match="a log's units come from its format .*; drop --time-unit, --rate-unit"):
+        read_recording(PX4_SAMPLE, ColumnSpec(time_unit="ms", rate_unit="rad/s"))
 
 
 @pytest.mark.skipif(not PX4_SAMPLE.exists(), reason="shared real data absent")
