@@ -39,6 +39,8 @@ from gyrocomp.errors import InputError
 __all__ = ["BatchResult", "run_batch", "expand_inputs", "folder_names", "SUMMARY_SCHEMA", "JOBS"]
 
 SUMMARY_SCHEMA = "gyrocomp.batch"
+RESERVED = ("summary.csv", "summary.parquet", ".batch.lock")
+"""Files of the batch itself in its folder; no input's folder may take these names."""
 BASE_COLUMNS = ("input", "output", "status", "error", "threshold", "sha256")
 """Leading columns of the summary; the command's key figures follow."""
 
@@ -176,16 +178,19 @@ def folder_names(paths: Sequence[str]) -> dict[str, str]:
 
     ``a/x.csv`` and ``b/x.csv`` become ``x-<8 hex>`` each, the hex the start
     of the SHA-256 of the path as given, so a name depends on nothing but
-    the inputs that share its stem.
+    the inputs that share its stem. A stem that is one of the batch's own
+    files (``summary.csv.parquet`` has the stem ``summary.csv``) gets the
+    suffix too.
     """
     stems = {}
     for p in paths:
-        stems.setdefault(Path(p).stem, []).append(p)
+        stems.setdefault(_safe(Path(p).stem), []).append(p)
     names = {}
     for stem, members in stems.items():
         for p in members:
-            suffix = "" if len(members) == 1 else "-" + hashlib.sha256(os.fspath(p).encode()).hexdigest()[:8]
-            names[p] = _safe(stem) + suffix
+            clash = len(members) > 1 or stem in RESERVED
+            suffix = "-" + hashlib.sha256(os.fspath(p).encode()).hexdigest()[:8] if clash else ""
+            names[p] = stem + suffix
     return names
 
 
@@ -256,13 +261,20 @@ def _write_summary(out: Path, result: BatchResult, settings: dict) -> None:
 
 @contextlib.contextmanager
 def _lock(out: Path) -> Iterator[None]:
-    """Hold ``OUT/.batch.lock`` so that two batches never write one folder at once."""
+    """Hold ``OUT/.batch.lock`` so that two batches never write one folder at once.
+
+    Workers commit a folder only while it is held
+    (:func:`gyrocomp.batch.manifest.commit_folder`), so a worker that
+    outlives a killed batch writes nothing.
+    """
     try:
         import fcntl
     except ImportError:  # not POSIX: no lock
         yield
         return
-    with open(out / ".batch.lock", "w") as fh:
+    from gyrocomp.batch.manifest import LOCK
+
+    with open(out / LOCK, "w") as fh:
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

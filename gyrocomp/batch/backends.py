@@ -10,6 +10,13 @@ worker died yields the exception instead of a result.
   :class:`concurrent.futures.ProcessPoolExecutor` whose processes are
   forked from a *forkserver* that has already imported gyrocomp, numpy,
   pandas and the stage's modules (safe with threads, and cheap per worker).
+  Workers die with the batch: each watches the batch process (a pidfd on
+  Linux, else a poll every 0.5 s) and kills itself when it is gone, even
+  by SIGKILL (a worker's parent is the forkserver, which outlives the
+  batch while any worker does, so the parent-death signal cannot serve);
+  an exception in the batch (Ctrl-C, SIGTERM) kills them at once. When a worker dies (out of memory, killed), the pool is
+  restarted: the inputs that were in flight are retried one at a time,
+  so only the input that kills a worker on its own fails.
 * :func:`run_dask`: an existing ``dask.distributed`` scheduler (the
   optional ``dask`` extra); every worker must see the inputs and the
   output folder at the same paths (a shared file system).
@@ -20,6 +27,11 @@ from __future__ import annotations
 import concurrent.futures as cf
 import multiprocessing
 import os
+import select
+import signal
+import threading
+import time
+from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Iterable, Iterator, Sequence
 
 from gyrocomp.errors import InputError
@@ -67,11 +79,75 @@ def run_local(
         return
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload([*_PRELOAD, *preload])
-    with cf.ProcessPoolExecutor(max_workers=n, mp_context=context) as pool:
+    queue = list(tasks)
+    while queue:
+        broken = []
+        for task, outcome in _pool_map(fn, queue, n, context):
+            if isinstance(outcome, BrokenProcessPool):
+                broken.append(task)
+            else:
+                yield task, outcome
+        broken.sort(key=lambda task: tasks.index(task))  # as given, not as the pool broke
+        if not broken:
+            return
+        suspect, queue = broken[0], broken[1:]
+        ((_, outcome),) = list(_pool_map(fn, [suspect], 1, context))  # alone: a death now is its own
+        yield suspect, outcome
+
+
+def _pool_map(fn, tasks: list, n: int, context) -> Iterator[tuple[dict, dict | BaseException]]:
+    """Run `tasks` in a fresh pool of `n` workers, yielding as they finish.
+
+    An exception in the batch while it runs (Ctrl-C, SIGTERM, or the
+    generator closed early) kills the workers before it propagates, so no
+    input goes on running, let alone committing, after the batch stopped.
+    """
+    pool = cf.ProcessPoolExecutor(max_workers=n, mp_context=context, initializer=_die_with_batch, initargs=(os.getpid(),))
+    try:
         futures = {pool.submit(fn, task): task for task in tasks}
         for future in cf.as_completed(futures):
             error = future.exception()
             yield futures[future], (future.result() if error is None else error)
+    except BaseException:
+        _kill_workers(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _kill_workers(pool: cf.ProcessPoolExecutor) -> None:
+    """Stop a pool now: cancel what has not started and kill the worker processes."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())  # no public API before Python 3.14
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        process.kill()
+
+
+def _die_with_batch(batch_pid: int) -> None:
+    """Worker initializer: a daemon thread that SIGKILLs this worker once the batch process has exited."""
+    threading.Thread(target=_watch, args=(batch_pid,), daemon=True, name="gyrocomp-batch-watch").start()
+
+
+def _watch(batch_pid: int) -> None:
+    try:
+        fd = os.pidfd_open(batch_pid)  # readable once the process has exited
+    except (AttributeError, OSError):
+        fd = None
+    if fd is not None:
+        select.select([fd], [], [])
+    else:
+        while _alive(batch_pid):
+            time.sleep(0.5)
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def run_dask(fn: Callable[[dict], dict], tasks: Iterable[dict], *, scheduler) -> Iterator[tuple[dict, dict | BaseException]]:

@@ -72,6 +72,10 @@ class Job:
     preload : tuple of str
         Modules the stage imports; worker processes import them before
         the first input arrives (:func:`gyrocomp.batch.backends.run_local`).
+    paired : tuple of (str, str)
+        ``(option, flag)`` of the options that name a second recording per
+        input (:func:`paired_path`); its content is part of what makes a
+        folder up to date.
     """
 
     name: str
@@ -80,6 +84,7 @@ class Job:
     resolve: Callable[[object, dict], dict] = lambda options, files: {}
     file_options: tuple = ()
     preload: tuple = ()
+    paired: tuple = ()
 
     @property
     def options_class(self):
@@ -153,15 +158,16 @@ def process_input(task: dict) -> dict:
     try:
         sha = artefacts.file_sha256(source)
         outcome["sha256"] = sha
-        done = mf.is_up_to_date(out_dir / task["name"], job.name, sha, task["settings"])
+        options = from_settings(job.options_class, task["settings"]["options"])
+        settings = {**task["settings"], "paired": _paired_records(job, options, source)}
+        done = mf.is_up_to_date(out_dir / task["name"], job.name, sha, settings)
         if done is not None:
             outcome.update(status="skipped", figures=done["figures"], threshold=done["threshold"])
             return outcome
         tmp = mf.new_folder(out_dir, task["name"])
-        options = from_settings(job.options_class, task["settings"]["options"])
         figures, threshold = job.execute(source, tmp, options, task["files"])
-        mf.write_manifest(tmp, command=job.name, input_name=source.name, input_sha256=sha, settings=task["settings"], figures=figures, threshold=threshold)
-        mf.commit_folder(tmp, out_dir / task["name"])
+        mf.write_manifest(tmp, command=job.name, input_name=source.name, input_sha256=sha, settings=settings, figures=figures, threshold=threshold)
+        mf.commit_folder(tmp, out_dir / task["name"], lock=out_dir / mf.LOCK)
         tmp = None
         outcome.update(status="ok", figures=figures, threshold=threshold)
     except Exception as err:  # a failing input is recorded, the batch goes on
@@ -170,6 +176,18 @@ def process_input(task: dict) -> dict:
         if tmp is not None:
             mf.discard_folder(tmp)
     return outcome
+
+
+def _paired_records(job: Job, options, source: Path) -> dict:
+    """``{flag: {name, sha256}}`` of the second recordings paired with `source`: a changed holdout is a changed input."""
+    from gyrocomp.artefacts import file_record
+
+    records = {}
+    for option, flag in job.paired:
+        path = _paired(getattr(options, option), source, flag)
+        if path is not None:
+            records[flag] = file_record(path)
+    return records
 
 
 def _one_line(err: BaseException) -> str:
@@ -351,7 +369,14 @@ JOBS: dict[str, Job] = {
         preload=("gyrocomp.allan", "matplotlib.figure", "matplotlib.backends.backend_agg"),
     ),
     "compensate": Job("compensate", _compensate_execute, owned=("workers",), resolve=_compensate_resolve, preload=("gyrocomp.pipeline",)),
-    "run": Job("run", _run_execute, owned=("workers",), resolve=_run_resolve, preload=("gyrocomp.pipeline", "matplotlib.pyplot")),
+    "run": Job(
+        "run",
+        _run_execute,
+        owned=("workers",),
+        resolve=_run_resolve,
+        preload=("gyrocomp.pipeline", "matplotlib.pyplot"),
+        paired=(("test", "--test"),),
+    ),
     "diagnose": Job(
         "diagnose",
         _diagnose_execute,
@@ -359,6 +384,7 @@ JOBS: dict[str, Job] = {
         resolve=_diagnose_resolve,
         file_options=("sim",),
         preload=("gyrocomp.diagnose", "matplotlib.pyplot"),
+        paired=(("holdout", "--holdout"),),
     ),
 }
 """The batchable commands by name."""

@@ -25,6 +25,7 @@ from pathlib import Path
 
 from gyrocomp import __version__, artefacts
 from gyrocomp.artefacts import file_sha256
+from gyrocomp.errors import GyrocompError
 
 __all__ = [
     "MANIFEST",
@@ -39,6 +40,8 @@ __all__ = [
 ]
 
 MANIFEST = "manifest.json"
+LOCK = ".batch.lock"
+"""The file a batch holds an exclusive ``flock`` on while it runs (:func:`gyrocomp.batch.run_batch`)."""
 MANIFEST_SCHEMA = "gyrocomp.batch-manifest"
 
 _TMP_TAG = ".tmp-"
@@ -115,14 +118,19 @@ def new_folder(out_dir: str | os.PathLike, name: str) -> Path:
     return folder
 
 
-def commit_folder(tmp: str | os.PathLike, target: str | os.PathLike) -> None:
+def commit_folder(tmp: str | os.PathLike, target: str | os.PathLike, lock: str | os.PathLike | None = None) -> None:
     """Move a finished temporary folder onto `target`, replacing an outdated one.
 
     The outdated folder is first renamed aside (``.<name>.old-<random>``), the
     new one renamed into place, then the old one deleted: at no instant
     does `target` hold a mix of old and new files.
+
+    With `lock`, commit only while some process (the batch) still holds it:
+    a worker that outlived its batch raises instead of writing.
     """
     tmp, target = Path(tmp), Path(target)
+    if lock is not None and not lock_is_held(lock):
+        raise GyrocompError(f"{target}: the batch that started this input is gone (its lock is free); nothing committed")
     aside = None
     if target.exists():
         aside = Path(tempfile.mkdtemp(prefix=f".{target.name}{_OLD_TAG}", dir=target.parent))
@@ -130,6 +138,25 @@ def commit_folder(tmp: str | os.PathLike, target: str | os.PathLike) -> None:
     os.replace(tmp, target)
     if aside is not None:
         shutil.rmtree(aside, ignore_errors=True)
+
+
+def lock_is_held(lock: str | os.PathLike) -> bool:
+    """Whether another open file (the batch's) holds an exclusive ``flock`` on `lock`; True where flock is missing."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        return True
+    try:
+        fh = open(lock, "r")
+    except FileNotFoundError:
+        return False
+    with fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return True
+        fcntl.flock(fh, fcntl.LOCK_UN)
+        return False
 
 
 def discard_folder(tmp: str | os.PathLike) -> None:
