@@ -34,10 +34,14 @@ from gyrocomp import artefacts, recordings
 from gyrocomp.errors import InputError
 from gyrocomp.recordings import ColumnSpec
 
-__all__ = ["CHUNK_ROWS", "ChunkReader", "supports", "read_chunks", "TableWriter"]
+__all__ = ["CHUNK_ROWS", "GapError", "ChunkReader", "supports", "read_chunks", "TableWriter"]
 
 CHUNK_ROWS = 1 << 16
 """Samples per chunk (the rows :meth:`gyrocomp.models._base.Learner.predict` evaluates at once)."""
+
+
+class GapError(InputError):
+    """A gap in the time of a streamed recording (a stream is one gap-free run; a file with gaps is read whole)."""
 
 
 class ChunkReader:
@@ -97,9 +101,13 @@ class ChunkReader:
                 require_temperature=self.require_temperature,
                 min_samples=2 if self.n_samples == 0 else 1,
                 jitter_tolerance=self.jitter_tolerance,
+                allow_gaps=True,
                 _where=(where, first + self.n_samples),
                 _owned=True,
             )
+            if len(chunk.segments) > 1:
+                row = first + self.n_samples + chunk.segments[1].start
+                raise GapError(f"{self.name} {where} {row}: a gap in `{self.columns.time}`; a streamed recording is one gap-free run")
             if chunk.time_origin is not None:
                 raise InputError(f"{self.name}: a streamed recording needs its time in seconds (--time-unit s)")
             time = chunk.time_s
@@ -108,6 +116,8 @@ class ChunkReader:
                 self.fs_hz = chunk.fs_hz
             else:
                 step = float(time[0]) - last_time
+                if step > nominal * (1 + self.jitter_tolerance):
+                    raise GapError(f"{self.name} {where} {first + self.n_samples}: a gap in `{self.columns.time}` after {last_time!r}; a streamed recording is one gap-free run")
                 if step <= 0 or abs(step - nominal) > self.jitter_tolerance * nominal:
                     raise InputError(
                         f"{self.name} {where} {first + self.n_samples}: `{self.columns.time}` = {float(time[0])!r} "

@@ -65,15 +65,15 @@ def compensate(
 
         options = from_params(stage.Options, ctx.params)
         with progress(ctx, f"compensate ({mode})", out) as update:
-            frame, summaries, _, caught = stage.to_files([recording, model], out, options, progress=update)
+            n_samples, summaries, caught = stage.compensate_files([recording, model], out, options, progress=update)
         for warning in caught:
             print(f"gyrocomp: warning: {warning.message}", file=sys.stderr)
     console = console_for(ctx, out)
     for axis, summary in summaries.items():
-        after = frame[stage.output_name(axis, "compensated")]
+        figures = summary["figures"]
         console.print(
-            f"{out} [{axis}]: {len(frame)} samples compensated by {summary['kind']} ({mode}); "
-            f"std {frame[axis].std():.4g} -> {after.std():.4g} {summary['unit']}",
+            f"{out} [{axis}]: {n_samples} samples compensated by {summary['kind']} ({mode}); "
+            f"std {figures['rate_std']:.4g} -> {figures['compensated_std']:.4g} {summary['unit']}",
             markup=False,
             highlight=False,
         )

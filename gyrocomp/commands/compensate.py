@@ -10,7 +10,7 @@ from typing import Callable, Optional, Sequence
 from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
-__all__ = ["Options", "to_files", "write"]
+__all__ = ["Options", "to_files", "streams", "stream_to_files", "compensate_files", "write"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,6 +112,148 @@ def to_files(
 
         drift_plot(recording, pairs, options.plot, title=f"{recording.name} compensated ({options.mode})", compensated=compensated)
     return table, summaries, recording, list(caught)
+
+
+def streams(inputs: Sequence[str | os.PathLike], options: Options = Options()) -> bool:
+    """Whether :func:`stream_to_files` can take these: causal mode, no resampling or plot, CSV or Parquet in seconds."""
+    from gyrocomp import streaming
+
+    return options.mode == "causal" and not options.resample and options.plot is None and streaming.supports(inputs[0], options.columns)
+
+
+def stream_to_files(
+    inputs: Sequence[str | os.PathLike],
+    out: str | os.PathLike,
+    options: Options = Options(),
+    *,
+    rows: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> tuple:
+    """:func:`to_files` in causal mode, in constant memory: read, compensate and write chunk by chunk.
+
+    The recording (a file, or CSV on standard input for ``-``) is read in
+    chunks of `rows` samples (:func:`gyrocomp.streaming.read_chunks`), every
+    axis of each chunk compensated by its
+    :class:`~gyrocomp.pipeline.compensate.CausalCompensation` and the chunk
+    written at once (``-``: CSV on standard output, flushed after each
+    chunk). The table's bytes are those of :func:`to_files` for a gap-free
+    recording longer than the rate window, the sample rate being the first
+    chunk's. A gap raises :class:`gyrocomp.streaming.GapError` (a file with
+    gaps goes to :func:`to_files`, which compensates it by segments).
+    ``compensated.json`` goes beside a file `out`, with the figures of
+    :func:`write` merged chunk by chunk.
+
+    Returns
+    -------
+    n_samples : int
+    summaries : dict of str to dict
+        Per axis, from :meth:`~gyrocomp.pipeline.compensate.CausalCompensation.summary`, with ``figures``.
+    caught : list of warnings.WarningMessage
+    """
+    import warnings
+
+    import pandas as pd
+
+    from gyrocomp import artefacts, streaming
+    from gyrocomp.pipeline.compensate import COMPENSATION_SCHEMA, CausalCompensation, load_models
+
+    recording_path, model_path = inputs
+    models = load_models(artefacts.read_json(model_path), str(model_path))
+    chunks = streaming.read_chunks(recording_path, options.columns, rows=rows or streaming.CHUNK_ROWS, require_temperature=True, usecols=[options.columns.temperature])
+
+    def header() -> dict:
+        records = [chunks.input_record(), artefacts.file_record(model_path)]
+        return artefacts.artefact_header(COMPENSATION_SCHEMA, inputs=records, settings={"mode": "causal"}, seed=options.seed)
+
+    streams, figures, pairs = {}, {}, None
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with streaming.TableWriter(out, header, header_known_first=str(recording_path) != "-") as writer:
+            for chunk in chunks:
+                if pairs is None:
+                    pairs = _pair_axes(chunk, models, str(model_path))
+                    clamp = True if options.clamp is None else options.clamp
+                    streams = {name: CausalCompensation(model, chunk.fs_hz, chunks.name, clamp=clamp) for name, model in pairs.items()}
+                    figures = {name: _RunningFigures() for name in pairs}
+                columns = {"time": chunk.time_s, **{name: chunk.axis(name).rate_dps for name in pairs}, "temperature": chunk.temperature_c}
+                results = {name: streams[name](columns[name], columns["temperature"]) for name in pairs}
+                for name in pairs:
+                    columns[output_name(name, "drift_model")] = results[name][0]
+                for name in pairs:
+                    columns[output_name(name, "compensated")] = results[name][1]
+                    figures[name].add(columns[name], *results[name])
+                writer.write(pd.DataFrame(columns))
+                if progress is not None:
+                    progress(chunks.n_samples, None)
+        summaries = {}
+        for name, model in pairs.items():
+            summary = {**streams[name].summary(), "model_axis": _model_axis(models, model), "unit": chunk.axis(name).axes[0].unit}
+            summaries[name] = {**summary, "figures": {"n_samples": chunks.n_samples, "n_segments": 1, "fs_hz": float(chunks.fs_hz), **figures[name].figures()}}
+    if str(out) != "-":
+        artefacts.write_json(Path(out).with_suffix(".json"), {**header(), "mode": "causal", "axes": summaries})
+    return chunks.n_samples, summaries, list(caught)
+
+
+class _RunningFigures:
+    """RMS of the drift model, standard deviations of the rate and the compensated rate, merged chunk by chunk (Chan et al. 1979)."""
+
+    def __init__(self):
+        self.n = 0
+        self.drift_sq = 0.0
+        self.moments = [(0.0, 0.0), (0.0, 0.0)]
+
+    def add(self, rate, drift, compensated) -> None:
+        import numpy as np
+
+        k = len(rate)
+        self.drift_sq += float(np.dot(drift, drift))
+        for i, x in enumerate((rate, compensated)):
+            mean, m2 = self.moments[i]
+            mean_k = float(x.mean())
+            m2_k = float(np.sum((x - mean_k) ** 2))
+            delta = mean_k - mean
+            total = self.n + k
+            self.moments[i] = (mean + delta * k / total, m2 + m2_k + delta * delta * self.n * k / total)
+        self.n += k
+
+    def figures(self) -> dict:
+        import math
+
+        return {
+            "drift_model_rms": math.sqrt(self.drift_sq / self.n),
+            "rate_std": math.sqrt(self.moments[0][1] / self.n),
+            "compensated_std": math.sqrt(self.moments[1][1] / self.n),
+        }
+
+
+def compensate_files(inputs, out, options: Options = Options(), *, progress=None) -> tuple:
+    """What ``gyrocomp compensate`` runs: :func:`stream_to_files` where :func:`streams` allows, else :func:`to_files`.
+
+    A file with gaps found while streaming is compensated whole, by
+    segments (the streamed output, written under a temporary name, is
+    dropped); standard input with a gap is refused.
+
+    Returns
+    -------
+    n_samples : int
+    summaries : dict of str to dict
+        Per axis, with ``figures`` (``rate_std``, ``compensated_std``, ...).
+    caught : list of warnings.WarningMessage
+    """
+    import numpy as np
+
+    from gyrocomp.streaming import GapError
+
+    if streams(inputs, options):
+        try:
+            return stream_to_files(inputs, out, options, progress=progress)
+        except GapError:
+            if str(inputs[0]) == "-":
+                raise
+    frame, summaries, _, caught = to_files(inputs, out, options, progress=progress)
+    for axis, summary in summaries.items():
+        summary["figures"] = {"rate_std": float(np.std(frame[axis])), "compensated_std": float(np.std(frame[output_name(axis, "compensated")]))}
+    return len(frame), summaries, caught
 
 
 def output_name(axis: str, what: str) -> str:

@@ -20,11 +20,18 @@ Either way a recording that leaves a training range is reported, per input
 and by how much (an :class:`ExtrapolationWarning` and ``summary["warnings"]``).
 
 ``drift_model`` is the sum of the segments' predicted drifts [deg/s].
+
+Memory: the learners are evaluated `CHUNK_ROWS` samples at a time, and the
+causal mode also runs on a stream (:class:`CausalCompensation`), whose
+state is the rate estimator's last readings and a few running figures, so
+``gyrocomp compensate --mode causal`` reads, compensates and writes one
+chunk at a time (:mod:`gyrocomp.streaming`).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 
 import numpy as np
@@ -34,7 +41,9 @@ from gyrocomp import recordings
 from gyrocomp.config import bind
 from gyrocomp.errors import InputError
 from gyrocomp.models._base import check_choice, check_float, finite_array
+from gyrocomp.pipeline.rate import CausalRate
 from gyrocomp.pipeline.settings import PIPELINE_KINDS, RateSettings
+from gyrocomp.streaming import CHUNK_ROWS
 from gyrocomp.pipeline.train import INPUTS, axis_models, segment_inputs, segments
 
 __all__ = [
@@ -42,6 +51,7 @@ __all__ = [
     "MODES",
     "ExtrapolationWarning",
     "DriftModel",
+    "CausalCompensation",
     "load_model",
     "clamp_inputs",
     "load_models",
@@ -95,13 +105,66 @@ class DriftModel:
         training target.
         """
         X = np.asarray(X, dtype=float)
-        if self.clip_inputs if clamp is None else clamp:
+        clamp = self.clip_inputs if clamp is None else clamp
+        out = {segment: np.empty(len(X)) for segment in self.learners}
+        for start in range(0, len(X), CHUNK_ROWS):
+            for segment, y in self._predict_rows(X[start : start + CHUNK_ROWS], clamp).items():
+                out[segment][start : start + CHUNK_ROWS] = y
+        return out
+
+    def _predict_rows(self, X: np.ndarray, clamp: bool) -> dict:
+        if clamp:
             X = clamp_inputs(X, self)
         out = {}
         for segment, (learner, x_offset, x_scale, y_offset, y_scale, y_range) in self.learners.items():
             y = learner.predict((X - x_offset) / x_scale) * y_scale + y_offset
             out[segment] = np.clip(y, *y_range) if self.clip_output else y
         return out
+
+
+class CausalCompensation:
+    """Causal compensation of one axis of a stream: call it on consecutive chunks, then :meth:`summary`.
+
+    Parameters
+    ----------
+    model : DriftModel
+    fs_hz : float
+        Sample rate [Hz].
+    name : str
+        The recording's name, for messages.
+    clamp : bool
+        Clamp temperature and dT/dt to the training ranges (:func:`clamp_inputs`).
+
+    Notes
+    -----
+    Chunks of `CHUNK_ROWS` samples, counted from the start, give the bytes
+    of :func:`compensate` on the whole recording when it is longer than
+    the rate window: the rate estimator lays its sums out from the start
+    whatever the chunks (:class:`gyrocomp.pipeline.rate.CausalRate`), and
+    the learners evaluate the same rows together.
+    """
+
+    def __init__(self, model: DriftModel, fs_hz: float, name: str, *, clamp: bool = True):
+        self.model = model
+        self.name = name
+        self.clamp = bool(clamp)
+        self._rate = CausalRate(model.rate, fs_hz)
+        self._seen = _Seen(model)
+
+    def __call__(self, rate, temperature) -> tuple[np.ndarray, np.ndarray]:
+        """``drift_model`` and ``compensated`` [deg/s] of the chunk."""
+        temperature = np.asarray(temperature, dtype=float)
+        rate = np.asarray(rate, dtype=float)
+        X = np.column_stack([temperature, self._rate(temperature)])
+        self._seen.add(X)
+        drift = np.sum(list(self.model.predict(X, clamp=self.clamp).values()), axis=0)
+        return drift, rate - drift
+
+    def summary(self) -> dict:
+        """Mode, kind, clamping, the ranges met and any extrapolation (issued as :class:`ExtrapolationWarning`)."""
+        summary = {"mode": "causal", "kind": self.model.kind, "parallel": self.model.parallel, "clamp": self.clamp}
+        summary["ranges"], summary["warnings"] = _ranges(self.name, self._seen, self.model, self.clamp)
+        return summary
 
 
 def load_model(obj: dict, name: str = "model.json") -> DriftModel:
@@ -271,7 +334,7 @@ def compensate(
     predicted = model.predict(X, clamp=clamp)
     drift_model = np.sum(list(predicted.values()), axis=0)
     summary = {"mode": mode, "kind": model.kind, "parallel": model.parallel, "clamp": bool(clamp)}
-    summary["ranges"], summary["warnings"] = _ranges(recording.name, X, model, clamp)
+    summary["ranges"], summary["warnings"] = _ranges(recording.name, _Seen(model).add(X), model, clamp)
     if mode == "full" and model.parallel:
         if seed is None:
             seed = model.obj.get("settings", {}).get("decompose_seed")
@@ -309,7 +372,26 @@ def _parallel_segments(rate, model: DriftModel, seed, workers, callback):
     return segments(np.asarray(result.components), labels, denoise_settings), classes
 
 
-def _ranges(name: str, X: np.ndarray, model: DriftModel, clamp: bool) -> tuple[dict, list[str]]:
+class _Seen:
+    """Running minimum, maximum and count outside the training range of each input [T, dT/dt]."""
+
+    def __init__(self, model: DriftModel):
+        self.ranges = (model.temperature_range_c, model.rate_range_c_per_s)
+        self.rows = 0
+        self.low, self.high = [math.inf, math.inf], [-math.inf, -math.inf]
+        self.outside = [0, 0]
+
+    def add(self, X: np.ndarray) -> "_Seen":
+        self.rows += len(X)
+        for column, (lo, hi) in enumerate(self.ranges):
+            x = X[:, column]
+            self.low[column] = min(self.low[column], float(x.min()))
+            self.high[column] = max(self.high[column], float(x.max()))
+            self.outside[column] += int(np.count_nonzero((x < lo) | (x > hi)))
+        return self
+
+
+def _ranges(name: str, seen: _Seen, model: DriftModel, clamp: bool) -> tuple[dict, list[str]]:
     """Each input's range met against its training range; one warning per input that leaves it."""
     ranges, messages = {}, []
     inputs = (
@@ -317,11 +399,10 @@ def _ranges(name: str, X: np.ndarray, model: DriftModel, clamp: bool) -> tuple[d
         ("temperature_rate_c_per_s", "dT/dt", "degC/s", model.rate_range_c_per_s),
     )
     for column, (key, label, unit, (lo, hi)) in enumerate(inputs):
-        x = X[:, column]
-        x_lo, x_hi = float(x.min()), float(x.max())
+        x_lo, x_hi = seen.low[column], seen.high[column]
         tolerance = 1e-9 * max(hi - lo, abs(lo), abs(hi))  # the training run itself, to rounding
         below, above = (d if d > tolerance else 0.0 for d in (lo - x_lo, x_hi - hi))
-        outside = float(np.mean((x < lo) | (x > hi)))
+        outside = seen.outside[column] / seen.rows
         ranges[key] = {"min": x_lo, "max": x_hi, "training_min": lo, "training_max": hi,
                        "below_by": below, "above_by": above, "share_outside": outside}
         if below == 0 and above == 0:
