@@ -30,6 +30,8 @@ from typing import Sequence
 
 import numpy as np
 
+from gyrocomp.allan import ieee952
+
 __all__ = [
     "save",
     "drift_figure",
@@ -220,13 +222,13 @@ def _readoff_points(s) -> tuple[dict, str]:
     points, parts = {}, []
     arw = terms["arw"].get("readoff")
     if arw is not None:
-        points["arw"] = (1.0, arw / 60.0)  # N [deg/sqrt(h)] = 60 sigma(1 s) [deg/s]
+        points["arw"] = (1.0, ieee952.from_datasheet("arw", arw))  # sigma(1 s) = N
     b, b_tau = terms["bias_instability"].get("readoff"), terms["bias_instability"].get("readoff_tau_s")
     if b is not None and b_tau is not None:
         points["bias_instability"] = (float(b_tau), float(np.interp(np.log(b_tau), np.log(s.tau_s), s.adev)))
     rrw = terms["rrw"].get("readoff")
     if rrw is not None:
-        points["rrw"] = (3.0, rrw / (3600.0 * 60.0))  # K [deg/h/sqrt(h)] = 3600 * 60 sigma(3 s) [deg/s]
+        points["rrw"] = (3.0, ieee952.from_datasheet("rrw", rrw))  # sigma(3 s) = K
     parts.append(f"N {arw:.3g}" if arw is not None else "N -")
     parts.append(f"B {b:.3g}" if b is not None else "B -")
     parts.append(f"K {rrw:.3g}" if rrw is not None else "K -")
