@@ -202,10 +202,10 @@ class _Detector:
     def spec(self, without=None):
         """The deterministic effects' nonlinear parameters, as :func:`gyrocomp.diagnose.effects.design` takes them."""
         from gyrocomp.diagnose.effects import DETERMINISTIC
-        from gyrocomp.diagnose.select import _NONLINEAR
+        from gyrocomp.sim.vocabulary import KINDS
 
         return {
-            e: ({_NONLINEAR[e]: p[_NONLINEAR[e]]} if e in _NONLINEAR else {})
+            e: ({KINDS[e].nonlinear: p[KINDS[e].nonlinear]} if KINDS[e].nonlinear else {})
             for e, p in self.case["effects"].items()
             if e in DETERMINISTIC and e != without
         }

@@ -42,7 +42,7 @@ import dataclasses
 import numpy as np
 from scipy import linalg, optimize, stats
 
-from gyrocomp.diagnose.effects import STOCHASTIC, effect_columns, n_params_runs, polynomial_columns
+from gyrocomp.diagnose.effects import KINDS, STOCHASTIC, effect_columns, n_params_runs, polynomial_columns
 from gyrocomp.diagnose.likelihood import NoiseModel, block_means
 
 __all__ = [
@@ -227,9 +227,7 @@ def detection_limit(runs, model, effect, shape, bic_margin, power=0.95):
         if shortfall(np.log(1e3)) < 0:
             return None
         value = noise.arw / unit * np.exp(optimize.brentq(shortfall, np.log(1e-3), np.log(1e3), xtol=0.01))
-        terms = dataclasses.replace(noise, **{effect: value}).datasheet_units()
-        key = "b_deg_per_h" if effect == "bias_instability" else "k_deg_per_h_per_sqrt_h"
-        return {key: terms[effect]}
+        return KINDS[effect].report({}, {}, dataclasses.replace(noise, **{effect: value}))
     target = edge_evidence(thr, power) / len(runs)
     if effect == "thermal_lag":
         plain, names = polynomial_columns(fit.run, None, fit.poly_degree, fit.scale)
@@ -253,10 +251,4 @@ def detection_limit(runs, model, effect, shape, bic_margin, power=0.95):
     columns, _ = effect_columns(fit.run, effect, shape, fit.poly_degree, fit.scale)
     # A sinusoid's evidence depends on its phase: the mean over phases is that of sin and cos averaged.
     unit = np.mean([deterministic_evidence(fit, c, spec, noise) for c in columns.T])
-    amplitude = float(np.sqrt(target / unit))
-    if effect == "temp_rate":
-        return {"coefficient_dps_per_c_per_s": {"value": amplitude, "unit": "deg/s per degC/s"}}
-    if effect == "rate_ramp":
-        # The column is time in hours: its coefficient is deg/s per hour.
-        return {"slope_dps_per_s": {"value": amplitude / 3600.0, "unit": "deg/s/s"}}
-    return {"amplitude_dps": {"value": amplitude, "unit": "deg/s"}}
+    return KINDS[effect].amplitude(float(np.sqrt(target / unit)))

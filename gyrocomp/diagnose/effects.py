@@ -2,8 +2,9 @@
 
 Every deterministic effect of the vocabulary (DESIGN.md, "The simulator and
 the sim-to-real gap") enters the model as columns of the design matrix,
-built from the simulator's own shapes in :mod:`gyrocomp.sim.effects`, so
-that the diagnosis fits exactly the terms the simulator would add:
+built by its object in the registry :data:`gyrocomp.sim.vocabulary.KINDS`
+that the simulator also draws its bias from, so that the diagnosis fits
+exactly the terms the simulator would add:
 
 ==============  ==========================================  ======================  ==========
 effect          columns                                     nonlinear parameter     signature
@@ -31,17 +32,19 @@ import dataclasses
 
 import numpy as np
 
-from gyrocomp.sim import effects as shapes
-from gyrocomp.sim.model import EFFECTS  # the vocabulary of DESIGN.md, in report order
+from gyrocomp.sim.vocabulary import DETERMINISTIC, EFFECTS, KINDS, NEEDS_TEMPERATURE, PER_RUN, STOCHASTIC
+from gyrocomp.sim.vocabulary.thermal_lag import polynomial_columns
 
 __all__ = [
     "EFFECTS",
+    "KINDS",
     "DETERMINISTIC",
     "STOCHASTIC",
     "NEEDS_TEMPERATURE",
-    "N_PARAMS",
+    "PER_RUN",
     "n_params_runs",
     "Run",
+    "TemperatureScale",
     "design",
     "polynomial_columns",
     "effect_columns",
@@ -49,44 +52,17 @@ __all__ = [
     "effect_params",
 ]
 
-STOCHASTIC = ("bias_instability", "rate_random_walk")
-"""Effects that enter the likelihood as covariance terms."""
-DETERMINISTIC = tuple(e for e in EFFECTS if e not in STOCHASTIC)
-"""Effects that enter as regressors on the rate."""
-
-NEEDS_TEMPERATURE = ("thermal_lag", "temp_rate", "hysteresis")
-
-N_PARAMS = {
-    "thermal_lag": 1,
-    "temp_rate": 1,
-    "hysteresis": 2,
-    "warmup": 2,
-    "rate_ramp": 1,
-    "periodic": 3,
-    "bias_instability": 1,
-    "rate_random_walk": 1,
-}
-"""Free parameters each effect adds (grid-searched ones count as one)."""
-
-PER_RUN = ("offset", "periodic_sin", "periodic_cos")
-"""Columns re-estimated on every run."""
-
 
 def n_params_runs(effect: str, n_runs: int) -> int:
-    """Free parameters `effect` adds when fitted on `n_runs` runs together.
-
-    Its :data:`PER_RUN` columns are fitted once per run: a sinusoid whose
-    phase each run re-estimates costs its period plus an amplitude and a
-    phase per run (``3 + 2 (n_runs - 1)``); every other effect costs
-    :data:`N_PARAMS` whatever the number of runs.
+    """Free parameters `effect` adds when fitted on `n_runs` runs together
+    (:meth:`gyrocomp.sim.vocabulary.Effect.n_params_runs`).
 
     >>> n_params_runs("periodic", 2), n_params_runs("warmup", 2)
     (5, 2)
     """
-    per_run = sum(1 for name in PER_RUN if name.startswith(f"{effect}_"))
-    return N_PARAMS[effect] + per_run * (n_runs - 1)
+    return KINDS[effect].n_params_runs(n_runs)
 
-_HOUR = 3600.0
+
 
 
 @dataclasses.dataclass(frozen=True)
@@ -174,35 +150,9 @@ def design(run: Run, spec: dict, poly_degree: int, scale: TemperatureScale | Non
     return np.hstack([p[0] for p in parts]), [n for p in parts for n in p[1]]
 
 
-def polynomial_columns(run: Run, tau_s, poly_degree, scale):
-    """``T~^k``, k = 1..degree, of the measured temperature or (``tau_s``) of the element's."""
-    if run.temperature_c is None or poly_degree == 0:
-        return np.empty((run.time_s.size, 0)), []
-    temperature = run.temperature_c
-    if tau_s is not None:
-        temperature = shapes.element_temperature(run.time_s, temperature, tau_s)
-    z = (temperature - scale.centre_c) / scale.half_range_c
-    return np.column_stack([z**k for k in range(1, poly_degree + 1)]), [f"temperature^{k}" for k in range(1, poly_degree + 1)]
-
-
 def effect_columns(run: Run, effect: str, params: dict, poly_degree=3, scale=None):
     """Full-rate columns of one deterministic effect (``thermal_lag``: the lagged polynomial)."""
-    t = run.time_s
-    if effect == "thermal_lag":
-        return polynomial_columns(run, params["tau_s"], poly_degree, scale)
-    if effect == "temp_rate":
-        col = shapes.temperature_rate(t, run.temperature_c, smooth_s=run.rate_smooth_s)
-    elif effect == "hysteresis":
-        col = shapes.hysteresis_branch(t, run.temperature_c, params["deadband_c"])
-    elif effect == "warmup":
-        col = shapes.warmup(t, 1.0, params["tau_s"])
-    elif effect == "rate_ramp":
-        col = shapes.rate_ramp(t, 1.0 / _HOUR)
-    else:
-        sin = shapes.periodic(t, 1.0, params["period_s"], 0.0)
-        cos = shapes.periodic(t, 1.0, params["period_s"], 0.5 * np.pi)
-        return np.column_stack([sin, cos]), ["periodic_sin", "periodic_cos"]
-    return col[:, None], [effect]
+    return KINDS[effect].columns(run, params, poly_degree, scale)
 
 
 def periodic_block_means(run: Run, period_s):
@@ -223,31 +173,4 @@ def periodic_block_means(run: Run, period_s):
 
 def effect_params(effect: str, spec: dict, beta: np.ndarray, names: list, noise) -> dict:
     """Fitted parameters of `effect` with their units, as the simulator's config names them."""
-    coef = dict(zip(names, beta))
-    if effect == "thermal_lag":
-        return {"tau_s": {"value": spec["thermal_lag"]["tau_s"], "unit": "s"}}
-    if effect == "temp_rate":
-        return {"coefficient_dps_per_c_per_s": {"value": coef["temp_rate"], "unit": "deg/s per degC/s"}}
-    if effect == "hysteresis":
-        return {
-            "amplitude_dps": {"value": coef["hysteresis"], "unit": "deg/s"},
-            "deadband_c": {"value": spec["hysteresis"]["deadband_c"], "unit": "degC"},
-        }
-    if effect == "warmup":
-        return {
-            "amplitude_dps": {"value": coef["warmup"], "unit": "deg/s"},
-            "tau_s": {"value": spec["warmup"]["tau_s"], "unit": "s"},
-        }
-    if effect == "rate_ramp":
-        return {"slope_dps_per_s": {"value": coef["rate_ramp"] / _HOUR, "unit": "deg/s/s"}}
-    if effect == "periodic":
-        a, b = coef["periodic_sin"], coef["periodic_cos"]
-        return {
-            "amplitude_dps": {"value": float(np.hypot(a, b)), "unit": "deg/s"},
-            "period_s": {"value": spec["periodic"]["period_s"], "unit": "s"},
-            "phase_rad": {"value": float(np.arctan2(b, a)), "unit": "rad (fit run)"},
-        }
-    terms = noise.datasheet_units()
-    if effect == "bias_instability":
-        return {"b_deg_per_h": terms["bias_instability"]}
-    return {"k_deg_per_h_per_sqrt_h": terms["rate_random_walk"]}
+    return KINDS[effect].report(dict(zip(names, beta)), spec.get(effect, {}), noise)

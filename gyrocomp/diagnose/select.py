@@ -64,7 +64,7 @@ from scipy import linalg, optimize
 
 from gyrocomp.diagnose.effects import (
     DETERMINISTIC,
-    N_PARAMS,
+    KINDS,
     PER_RUN,
     Run,
     TemperatureScale,
@@ -87,10 +87,6 @@ __all__ = [
     "greedy",
     "sample_arw",
 ]
-
-_NONLINEAR = {"thermal_lag": "tau_s", "hysteresis": "deadband_c", "warmup": "tau_s", "periodic": "period_s"}
-"""The deterministic effects with a nonlinear parameter (grid-searched)."""
-
 
 @dataclasses.dataclass(frozen=True)
 class Fitted:
@@ -162,14 +158,14 @@ def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
         # one (a warm-up fitted alone stretches its tau over a ramp): refit
         # each with the new effect in (one coordinate-descent pass).
         for other in current.spec:
-            if _NONLINEAR.get(other):
+            if KINDS[other].nonlinear:
                 trial = dataclasses.replace(current, spec=spec)
                 spec[other] = _best_nonlinear(problem, trial, other)
     else:
         stochastic.append(effect)
     Xb, names = problem.design_blocks(spec)
     noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, current.noise, ("arw",) + tuple(stochastic))
-    k = current.n_params + N_PARAMS[effect]
+    k = current.n_params + KINDS[effect].n_params
     return Fitted(current.order + (effect,), spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
 
 
@@ -392,7 +388,7 @@ def joint_noise_gain(fit: Problem, holdout: Problem, current: Fitted, model: Fit
         profile_deviance(y, X, basis.whitener(noise1))[0] - profile_deviance(y, X, basis.whitener(noise0))[0]
         for y, X, basis in runs
     )
-    return dev1 - dev0 + N_PARAMS[effect] * np.log(fit.y.size + holdout.y.size), per_run
+    return dev1 - dev0 + KINDS[effect].n_params * np.log(fit.y.size + holdout.y.size), per_run
 
 
 def holdout_gain(problem: Problem, current: Fitted, model: Fitted, effect: str) -> float:
@@ -571,7 +567,7 @@ def _refit(problem: Problem, baseline: Fitted, order: tuple, spec: dict, noise: 
             values[e] = 0.0
     Xb, names = problem.design_blocks(spec)
     noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, NoiseModel(**values), ("arw",) + stochastic)
-    k = baseline.n_params + sum(N_PARAMS[e] for e in order[len(baseline.order) :])
+    k = baseline.n_params + sum(KINDS[e].n_params for e in order[len(baseline.order) :])
     return Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
 
 
@@ -586,7 +582,8 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_probl
     """
     s = problem.settings
     run = problem.run
-    if not _NONLINEAR.get(effect):
+    key = KINDS[effect].nonlinear
+    if not key:
         return {}
     length_s = run.n_blocks * run.block_s
     parts = [_JointPart(problem, current, effect)] + [_JointPart(p, m, effect) for p, m in others_problems]
@@ -594,19 +591,10 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_probl
     def deviance(params):
         return float(_joint_deviance(parts, params, effect).sum())
 
+    grid = KINDS[effect].grid(s, length_s, run.block_s)
     if effect == "hysteresis":
-        grid = [float(v) for v in s.hysteresis_deadband_c]
-        values = [deviance({"deadband_c": v}) for v in grid]
-        return {"deadband_c": grid[int(np.argmin(values))]}
-    if effect == "periodic":
-        f_lo = 2.0 / length_s
-        f_hi = 1.0 / (s.periodic_min_blocks * run.block_s)
-        grid = 1.0 / np.arange(f_lo, f_hi, 1.0 / (s.periodic_oversample * length_s))
-        key = "period_s"
-    else:
-        lo, hi = s.thermal_lag_tau_s if effect == "thermal_lag" else s.warmup_tau_s
-        grid = np.geomspace(lo, hi, s.tau_grid_points)
-        key = "tau_s"
+        values = [deviance({key: float(v)}) for v in grid]
+        return {key: float(grid[int(np.argmin(values))])}
     if effect == "periodic":
         values = _periodic_grid_deviances(parts, grid)
     else:
@@ -748,7 +736,7 @@ def joint_gain(fit: Problem, holdout: Problem, current: Fitted, effect: str):
     before = runs_deviance(current.spec)
     spec = {**current.spec, effect: _best_nonlinear(fit, current, effect, ((holdout, on_holdout),))}
     for other in current.spec:
-        if _NONLINEAR.get(other):
+        if KINDS[other].nonlinear:
             trial = dataclasses.replace(current, spec=spec)
             spec[other] = _best_nonlinear(fit, trial, other, ((holdout, dataclasses.replace(on_holdout, spec=spec)),))
     change = runs_deviance(spec) - before

@@ -21,6 +21,15 @@ from pathlib import Path
 from gyrocomp.config import CONFIG_DIR, apply_overrides, bind, load_config
 from gyrocomp.errors import InputError
 from gyrocomp.sim.profile import ProfileSettings, unit_field
+from gyrocomp.sim.vocabulary import EFFECTS, KINDS
+from gyrocomp.sim.vocabulary.bias_instability import BiasInstability
+from gyrocomp.sim.vocabulary.hysteresis import Hysteresis
+from gyrocomp.sim.vocabulary.periodic import Periodic
+from gyrocomp.sim.vocabulary.rate_ramp import RateRamp
+from gyrocomp.sim.vocabulary.rate_random_walk import RateRandomWalk
+from gyrocomp.sim.vocabulary.temp_rate import TempRate
+from gyrocomp.sim.vocabulary.thermal_lag import ThermalLag
+from gyrocomp.sim.vocabulary.warmup import Warmup
 
 __all__ = [
     "EFFECTS",
@@ -41,98 +50,16 @@ __all__ = [
     "units_of",
 ]
 
-EFFECTS = (
-    "thermal_lag",
-    "temp_rate",
-    "hysteresis",
-    "warmup",
-    "rate_ramp",
-    "periodic",
-    "bias_instability",
-    "rate_random_walk",
-)
-"""The effect vocabulary of DESIGN.md, in the order reports list them."""
-
-
 @dataclasses.dataclass(frozen=True)
-class ThermalLag:
-    """``thermal_lag``: the bias polynomial is evaluated at the element temperature,
-    a first-order lag of the housing temperature (:func:`~gyrocomp.sim.effects.element_temperature`)."""
-
-    enabled: bool = True
-    tau_s: float = unit_field(400.0, "s")
-
-
-@dataclasses.dataclass(frozen=True)
-class TempRate:
-    """``temp_rate``: bias ``g dT/dt`` from thermal gradients (IEEE Std 1431)."""
-
-    enabled: bool = True
-    coefficient_dps_per_c_per_s: float = unit_field(1.5, "deg/s per degC/s")
-
-
-@dataclasses.dataclass(frozen=True)
-class Hysteresis:
-    """``hysteresis``: bias ``+A`` on the heating branch and ``-A`` on the cooling branch
-    (:func:`~gyrocomp.sim.effects.hysteresis_branch`)."""
-
-    enabled: bool = False
-    amplitude_dps: float = unit_field(0.01, "deg/s")
-    deadband_c: float = unit_field(0.5, "degC")
-
-
-@dataclasses.dataclass(frozen=True)
-class Warmup:
-    """``warmup``: exponential power-on transient."""
-
-    enabled: bool = True
-    amplitude_dps: float = unit_field(0.03, "deg/s")
-    tau_s: float = unit_field(900.0, "s")
-
-
-@dataclasses.dataclass(frozen=True)
-class RateRamp:
-    """``rate_ramp``: bias linear in time since power-on."""
-
-    enabled: bool = False
-    slope_dps_per_s: float = unit_field(2e-7, "deg/s/s")
-
-
-@dataclasses.dataclass(frozen=True)
-class Periodic:
-    """``periodic``: sinusoidal interference of fixed period."""
-
-    enabled: bool = False
-    amplitude_dps: float = unit_field(0.005, "deg/s")
-    period_s: float = unit_field(1800.0, "s")
-    phase_rad: float = unit_field(0.0, "rad")
-
-
-@dataclasses.dataclass(frozen=True)
-class BiasInstability:
-    """``bias_instability``: flicker bias noise of IEEE bias instability ``B``."""
-
-    enabled: bool = True
-    b_deg_per_h: float = unit_field(10.0, "deg/h")
-
-
-@dataclasses.dataclass(frozen=True)
-class RateRandomWalk:
-    """``rate_random_walk``: random walk of the bias with IEEE coefficient ``K``."""
-
-    enabled: bool = True
-    k_deg_per_h_per_sqrt_h: float = unit_field(5.0, "deg/h/sqrt(h)")
-
-
-@dataclasses.dataclass(frozen=True)
-class GyroSettings:
+class _Baseline:
     """One gyro: the baseline error model and the effects beyond it.
 
     The baseline (both papers' model) is
     ``rate = offset + sum_k c_k (T - T_ref)^k + white noise(ARW)``;
     each effect table adds one term of the vocabulary. Scale factor
     ``(1 + s_0 + s_1 (T - T_ref))`` multiplies an optional reference rate,
-    and the output is quantised to `resolution_dps`.
+    and the output is quantised to `resolution_dps`. :class:`GyroSettings`
+    adds one table per effect of :data:`gyrocomp.sim.vocabulary.KINDS`.
     """
 
     name: str = "dual-mass-default"
@@ -143,14 +70,6 @@ class GyroSettings:
     resolution_dps: float = unit_field(1e-4, "deg/s")
     scale_factor_ppm: float = unit_field(0.0, "ppm")
     scale_factor_ppm_per_c: float = unit_field(100.0, "ppm/degC")
-    thermal_lag: ThermalLag = ThermalLag()
-    temp_rate: TempRate = TempRate()
-    hysteresis: Hysteresis = Hysteresis()
-    warmup: Warmup = Warmup()
-    rate_ramp: RateRamp = RateRamp()
-    periodic: Periodic = Periodic()
-    bias_instability: BiasInstability = BiasInstability()
-    rate_random_walk: RateRandomWalk = RateRandomWalk()
 
     def __post_init__(self):
         if len(self.temperature_coefficients) > 3:
@@ -164,6 +83,15 @@ class GyroSettings:
     def active_effects(self) -> list[str]:
         """Names of the enabled effects, in vocabulary order."""
         return [name for name in EFFECTS if getattr(self, name).enabled]
+
+
+GyroSettings = dataclasses.make_dataclass(
+    "GyroSettings",
+    [(name, effect.settings, dataclasses.field(default=effect.settings())) for name, effect in KINDS.items()],
+    bases=(_Baseline,),
+    frozen=True,
+    namespace={"__doc__": _Baseline.__doc__, "__module__": __name__},
+)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -25,14 +25,15 @@ import pandas as pd
 from gyrocomp.config import settings_dict
 from gyrocomp.errors import InputError
 from gyrocomp.sim import effects, noise
-from gyrocomp.sim.model import EFFECTS, GyroSettings, ReferenceSettings, SimConfig, units_of
+from gyrocomp.sim.model import GyroSettings, ReferenceSettings, SimConfig, units_of
 from gyrocomp.sim.profile import Profile, ProfileSettings, profile_duration_s, temperature_profile
+from gyrocomp.sim.vocabulary import DETERMINISTIC, EFFECTS, KINDS, STOCHASTIC
 
 __all__ = ["simulate", "run", "reference_rate", "RECORDING_SCHEMA"]
 
 RECORDING_SCHEMA = "gyrocomp.recording"
 
-_STREAMS = ("temperature_sensor", "white", "bias_instability", "rate_random_walk")
+_STREAMS = ("temperature_sensor", "white") + STOCHASTIC
 """Independent random streams, spawned from the seed in this order, so that
 switching one noise source on or off leaves the others' draws unchanged."""
 
@@ -103,31 +104,11 @@ def simulate(
         total += values
         return total
 
-    poly = effects.bias_polynomial(housing, gyro.temperature_coefficients, gyro.reference_c)
-    drift = add(None, "truth_baseline", poly + gyro.offset_dps)
-    if gyro.thermal_lag.enabled:
-        element = effects.element_temperature(time_s, housing, gyro.thermal_lag.tau_s)
-        lagged = effects.bias_polynomial(element, gyro.temperature_coefficients, gyro.reference_c)
-        drift = add(drift, "truth_thermal_lag", lagged - poly)
-        del element, lagged
-    del poly
+    drift = add(None, "truth_baseline", effects.bias_polynomial(housing, gyro.temperature_coefficients, gyro.reference_c) + gyro.offset_dps)
     report(2, steps)
-    if gyro.temp_rate.enabled:
-        rate_c = effects.temperature_rate(time_s, housing)
-        drift = add(drift, "truth_temp_rate", gyro.temp_rate.coefficient_dps_per_c_per_s * rate_c)
-        del rate_c
-    if gyro.hysteresis.enabled:
-        branch = effects.hysteresis_branch(time_s, housing, gyro.hysteresis.deadband_c)
-        drift = add(drift, "truth_hysteresis", gyro.hysteresis.amplitude_dps * branch)
-        del branch
-    report(3, steps)
-    if gyro.warmup.enabled:
-        drift = add(drift, "truth_warmup", effects.warmup(time_s, gyro.warmup.amplitude_dps, gyro.warmup.tau_s))
-    if gyro.rate_ramp.enabled:
-        drift = add(drift, "truth_rate_ramp", effects.rate_ramp(time_s, gyro.rate_ramp.slope_dps_per_s))
-    if gyro.periodic.enabled:
-        p = gyro.periodic
-        drift = add(drift, "truth_periodic", effects.periodic(time_s, p.amplitude_dps, p.period_s, p.phase_rad))
+    for name in DETERMINISTIC:
+        if getattr(gyro, name).enabled:
+            drift = add(drift, f"truth_{name}", KINDS[name].bias(time_s, housing, gyro))
     if keep:
         parts["truth_drift"] = drift.copy()
     report(4, steps)
@@ -135,13 +116,10 @@ def simulate(
     rate = drift
     rate = add(rate, "truth_noise", noise.white(n, fs, gyro.arw, rng["white"]))
     report(5, steps)
-    if gyro.bias_instability.enabled:
-        b = gyro.bias_instability.b_deg_per_h
-        rate = add(rate, "truth_bias_instability", noise.flicker(n, fs, b, rng["bias_instability"]))
-    report(6, steps)
-    if gyro.rate_random_walk.enabled:
-        k = gyro.rate_random_walk.k_deg_per_h_per_sqrt_h
-        rate = add(rate, "truth_rate_random_walk", noise.random_walk(n, fs, k, rng["rate_random_walk"]))
+    for name in STOCHASTIC:
+        table = getattr(gyro, name)
+        if table.enabled:
+            rate = add(rate, f"truth_{name}", KINDS[name].noise(n, fs, table, rng[name]))
     report(7, steps)
 
     columns = {"time": time_s, "rate": rate, "temperature": temps.measured_c}

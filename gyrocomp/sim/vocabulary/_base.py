@@ -1,0 +1,117 @@
+"""The interface every effect of the vocabulary implements (:data:`gyrocomp.sim.vocabulary.KINDS`)."""
+
+from __future__ import annotations
+
+import abc
+
+import numpy as np
+
+__all__ = ["Effect", "HOUR_S"]
+
+HOUR_S = 3600.0
+
+
+class Effect(abc.ABC):
+    """One effect of the vocabulary: its simulator table, its regressors and its report.
+
+    Class attributes
+    ----------------
+    name : str
+        The vocabulary name (DESIGN.md).
+    settings : type
+        Frozen dataclass of the ``[gyro.<name>]`` table; every numeric field
+        carries its unit (:func:`gyrocomp.sim.profile.unit_field`).
+    stochastic : bool
+        A noise term (a covariance term of the likelihood), not a regressor.
+    needs_temperature : bool
+    nonlinear : str or None
+        The parameter searched on a grid (``tau_s``, ``deadband_c``,
+        ``period_s``); the others enter linearly.
+    grid_setting : str or None
+        The ``[diagnose]`` setting (:class:`gyrocomp.diagnose.DiagnoseSettings`)
+        holding that grid.
+    n_params : int
+        Free parameters on one run (a grid-searched one counts as one).
+    per_run : tuple of str
+        Design columns re-estimated on every run (an interference phase).
+    """
+
+    name: str = ""
+    settings: type = object
+    stochastic: bool = False
+    needs_temperature: bool = False
+    nonlinear: str | None = None
+    grid_setting: str | None = None
+    n_params: int = 1
+    per_run: tuple = ()
+
+    def __repr__(self):
+        return f"<effect {self.name}>"
+
+    def n_params_runs(self, n_runs: int) -> int:
+        """Free parameters when fitted on `n_runs` runs together: the per-run columns count once per run.
+
+        >>> from gyrocomp.sim.vocabulary import KINDS
+        >>> KINDS["periodic"].n_params_runs(2), KINDS["warmup"].n_params_runs(2)
+        (5, 2)
+        """
+        return self.n_params + len(self.per_run) * (n_runs - 1)
+
+    def bias(self, time_s, housing_c, gyro) -> np.ndarray:
+        """The simulated bias contribution [deg/s] of a deterministic effect.
+
+        Parameters
+        ----------
+        time_s : ndarray, shape (n,)
+        housing_c : ndarray, shape (n,)
+            The true (noise-free) housing temperature [degC].
+        gyro : gyrocomp.sim.model.GyroSettings
+            The whole gyro (``thermal_lag`` needs its polynomial); this
+            effect's table is ``getattr(gyro, self.name)``.
+        """
+        raise TypeError(f"{self.name} is a noise term: it has no deterministic bias")
+
+    def noise(self, n, fs_hz, table, rng) -> np.ndarray:
+        """``n`` samples [deg/s] of a noise term at `fs_hz` from its table and generator."""
+        raise TypeError(f"{self.name} is deterministic: it draws no noise")
+
+    def columns(self, run, params: dict, poly_degree: int = 3, scale=None):
+        """Full-rate design columns of a deterministic effect.
+
+        Parameters
+        ----------
+        run : gyrocomp.diagnose.effects.Run
+        params : dict
+            ``{nonlinear parameter: value}`` (empty without one).
+        poly_degree, scale
+            The baseline polynomial (``thermal_lag`` re-evaluates it at the
+            element temperature).
+
+        Returns
+        -------
+        X : ndarray, shape (n, p)
+        names : list of str
+        """
+        raise TypeError(f"{self.name} is a noise term: it has no design columns")
+
+    def grid(self, settings, length_s: float, block_s: float) -> np.ndarray:
+        """The grid of the nonlinear parameter for a run `length_s` long in blocks of `block_s`."""
+        lo, hi = getattr(settings, self.grid_setting)
+        return np.geomspace(lo, hi, settings.tau_grid_points)
+
+    @abc.abstractmethod
+    def report(self, coef: dict, params: dict, noise) -> dict:
+        """Fitted parameters ``{name: {"value", "unit"}}`` in the simulator's names.
+
+        Parameters
+        ----------
+        coef : dict
+            Fitted design coefficients by column name.
+        params : dict
+            The fitted nonlinear parameter.
+        noise : gyrocomp.diagnose.likelihood.NoiseModel
+        """
+
+    def amplitude(self, value: float) -> dict:
+        """A unit-column coefficient `value` as the reported amplitude (detection limits)."""
+        return {"amplitude_dps": {"value": value, "unit": "deg/s"}}

@@ -1,0 +1,52 @@
+"""``hysteresis``: the bias keeps the branch of the last temperature direction through a soak."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from gyrocomp.sim.vocabulary._base import Effect
+from gyrocomp.sim import effects as shapes
+from gyrocomp.sim.profile import unit_field
+
+
+@dataclasses.dataclass(frozen=True)
+class Hysteresis:
+    """``hysteresis``: bias ``+A`` on the heating branch and ``-A`` on the cooling branch
+    (:func:`~gyrocomp.sim.effects.hysteresis_branch`)."""
+
+    enabled: bool = False
+    amplitude_dps: float = unit_field(0.01, "deg/s")
+    deadband_c: float = unit_field(0.5, "degC")
+
+
+class _Hysteresis(Effect):
+    """Column: the heating (+1) / cooling (-1) branch of a play operator of width ``deadband_c``."""
+
+    name = "hysteresis"
+    settings = Hysteresis
+    needs_temperature = True
+    nonlinear = "deadband_c"
+    grid_setting = "hysteresis_deadband_c"
+    n_params = 2
+
+    def bias(self, time_s, housing_c, gyro):
+        h = gyro.hysteresis
+        return h.amplitude_dps * shapes.hysteresis_branch(time_s, housing_c, h.deadband_c)
+
+    def columns(self, run, params, poly_degree=3, scale=None):
+        col = shapes.hysteresis_branch(run.time_s, run.temperature_c, params["deadband_c"])
+        return col[:, None], [self.name]
+
+    def grid(self, settings, length_s, block_s):
+        return np.array([float(v) for v in getattr(settings, self.grid_setting)])
+
+    def report(self, coef, params, noise):
+        return {
+            "amplitude_dps": {"value": coef[self.name], "unit": "deg/s"},
+            "deadband_c": {"value": params["deadband_c"], "unit": "degC"},
+        }
+
+
+EFFECT = _Hysteresis()
