@@ -1,12 +1,16 @@
-"""Score `gyrocomp diagnose` on simulated fit/holdout pairs whose effects are withheld.
+"""Score `gyrocomp diagnose` on simulated runs whose effects are withheld (the in-sim benchmark).
 
-Each pair is one gyro (the default gyro's baseline: offset, cubic in
+Each case ("pair") is one gyro (the default gyro's baseline: offset, cubic in
 temperature, ARW 1 deg/sqrt(h), 1e-4 deg/s LSB; the measured temperature has
 the profile's sensor noise and LSB) carrying none, one or two effects drawn at
-random, on an 8-hour run of a random oven profile at 1 or 2 Hz. The fit and
-holdout runs share the gyro and the profile and differ in their noise seed.
-Only the two recordings go to :func:`gyrocomp.diagnose.diagnose`; its
-selection is scored against the hidden truth.
+random, on 8-hour runs of a random oven profile at 1 or 2 Hz: a fit run, a
+second selection run A and a holdout B, which share the gyro and the
+profile and differ in their noise seed. Only the recordings go to
+:func:`gyrocomp.diagnose.diagnose` as ``diagnose(fit, [A, B])``: the effects
+are selected on the pair (fit, A), and the held-out gap comes from B, which
+took no part in the selection. Its selection is scored against the hidden
+truth. The recordings are drawn by :mod:`gyrocomp.sim`, whose effect shapes
+the diagnosis fits: an independent check is ``diagnose_independent.py``.
 
 Amplitudes (``--draw``):
 
@@ -128,7 +132,7 @@ def make_case(index, seed, draw="edge"):
         "profile": PROFILES[int(rng.integers(len(PROFILES)))],
         "fs_hz": float(RATES_HZ[int(rng.integers(len(RATES_HZ)))]),
         "effects": {e: draw_effect(e, rng) for e in effects},
-        "seeds": [int(s) for s in rng.integers(0, 2**31, size=2)],
+        "seeds": [int(s) for s in rng.integers(0, 2**31, size=3)],
     }
     if draw == "edge":
         strength = np.random.default_rng([seed, index, 1]).uniform(0.0, 1.0, size=len(effects))
@@ -149,7 +153,7 @@ def _gyro(case):
 
 
 def simulate_pair(case, truth_columns=False):
-    """Two recordings (fit, holdout) of the case's gyro, and the fit run's frame."""
+    """Three recordings (fit, A, B) of the case's gyro, and the fit run's frame."""
     from gyrocomp.config import bind, load_config
     from gyrocomp.recordings import recording_from_frame
     from gyrocomp.sim.profile import ProfileSettings
@@ -158,7 +162,7 @@ def simulate_pair(case, truth_columns=False):
     gyro = _gyro(case)
     profile = bind(ProfileSettings, load_config(HERE.parent / f"configs/profiles/{case['profile']}.toml")["profile"], "profile")
     recs, frames = [], []
-    for name, seed in zip(("fit", "holdout"), case["seeds"]):
+    for name, seed in zip(("fit", "A", "B"), case["seeds"]):
         frame, _ = simulate(gyro, profile, fs_hz=case["fs_hz"], seed=seed, duration_s=DURATION_S, truth_columns=truth_columns)
         recs.append(recording_from_frame(frame[["time", "rate", "temperature"]], name=name))
         frames.append(frame)
@@ -173,8 +177,8 @@ class _Detector:
 
         self.case = case
         self.gyro = _gyro(case)
-        (fit, holdout), frame = simulate_pair(case, truth_columns=True)
-        self.problem, _, _ = problems(fit, holdout, settings)
+        (fit, _, _), frame = simulate_pair(case, truth_columns=True)
+        self.problem, _, _ = problems(fit, [], settings)
         self.housing = frame["truth_temperature"].to_numpy()
         self.unit = {}
         for e in case["effects"]:
@@ -297,9 +301,9 @@ def run_case(case):
     from gyrocomp.diagnose import diagnose, get_config
 
     case = resolve_case(case)
-    (fit, holdout), _ = simulate_pair(case)
+    (fit, a, b), _ = simulate_pair(case)
     t0 = time.perf_counter()
-    report = diagnose(fit, holdout, get_config())
+    report = diagnose(fit, [a, b], get_config())
     elapsed = time.perf_counter() - t0
     return {
         **case,

@@ -31,7 +31,12 @@ def diagnose(
     fit: Annotated[Path, typer.Argument(help="Recording to calibrate on (CSV or Parquet); temperature optional.")],
     out: Annotated[Path, typer.Option("--out", help="report.json to write (schema gyrocomp.diagnosis); - for stdout.")],
     holdout: Annotated[
-        Optional[Path], typer.Option("--holdout", help="A second run of the same gyro: checks each effect and gives the held-out gap.")
+        Optional[list[Path]],
+        typer.Option(
+            "--holdout",
+            help="Another run of the same gyro; repeat for several. The last one takes no part in the selection and "
+            "gives the held-out gap; the ones before it join FIT in the selection.",
+        ),
     ] = None,
     sim: Annotated[
         Optional[Path],
@@ -53,7 +58,7 @@ def diagnose(
 ) -> None:
     """Calibrate the baseline simulator (offset + cubic in temperature + white noise) on FIT,
     name the unmodelled effects that explain the rest, and show where the gap lies and how
-    far it shrinks on the held-out run. Several axes (--rate-col gx,gy,gz) get a
+    far it shrinks on a held-out run that took no part in the selection. Several axes (--rate-col gx,gy,gz) get a
     verdict each, against the held-out axis of the same name."""
     with report_errors(ctx):
         from gyrocomp.commands import diagnose as stage, from_params

@@ -19,8 +19,10 @@ class Options:
 
     Attributes
     ----------
-    holdout : path-like or None
-        A second run of the same gyro: checks each effect and gives the held-out gap.
+    holdout : sequence of path-like
+        Other runs of the same gyro. The last one takes no part in the
+        selection and gives the held-out gap; the ones before it join the
+        fit run in the selection (:func:`gyrocomp.diagnose.diagnose`).
     sim : path-like or None
         A simulator config whose enabled effects join the baseline (refitted).
     config : str
@@ -34,7 +36,7 @@ class Options:
         Interpolate a jittered time axis instead of refusing it.
     """
 
-    holdout: Optional[str | os.PathLike] = None
+    holdout: Sequence[str | os.PathLike] = ()
     sim: Optional[str | os.PathLike] = None
     config: str = "diagnose"
     plot: Optional[str | os.PathLike] = None
@@ -87,7 +89,8 @@ def to_files(
         )
 
     fit_rec = read(fit)
-    hold_rec = read(options.holdout) if options.holdout else None
+    holdouts = [options.holdout] if isinstance(options.holdout, (str, os.PathLike)) else list(options.holdout or ())
+    hold_recs = [read(path) for path in holdouts]
     start = ()
     if options.sim is not None:
         from gyrocomp.sim.model import load_sim_config
@@ -95,11 +98,11 @@ def to_files(
         start = tuple(load_sim_config(options.sim).gyro.active_effects())
     bodies = {}
     for axis in fit_rec.axis_names:
-        held = None if hold_rec is None else hold_rec.axis(axis if len(fit_rec.axes) > 1 else None)
+        held = [rec.axis(axis if len(fit_rec.axes) > 1 else None) for rec in hold_recs]
         bodies[axis] = diagnose(
             fit_rec.axis(axis), held, settings, start_effects=start, callback=progress, unexplained_settings=unexplained_settings
         )
-    records = [fit_rec.input_record()] + ([hold_rec.input_record()] if hold_rec else [])
+    records = [rec.input_record() for rec in [fit_rec] + hold_recs]
     report = to_json({}, inputs=records, settings={**settings_dict(settings), "unexplained": settings_dict(unexplained_settings)})
     verdicts = {axis: {**report, **to_json(body, inputs=records, settings=report["settings"]), "axis": axis} for axis, body in bodies.items()}
     if len(verdicts) == 1:

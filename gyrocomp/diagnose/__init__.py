@@ -4,14 +4,19 @@
 simulator and the sim-to-real gap": per-run offset, cubic polynomial in the
 measured temperature, white noise) on a fit recording, then
 
-1. **which** -- adds the effects of the vocabulary greedily by BIC on a
-   block-mean Gaussian likelihood in which deterministic effects are
-   regressors and flicker / random walk are covariance terms, each kept only
-   when it also improves the held-out likelihood
-   (:mod:`gyrocomp.diagnose.select`);
+1. **which** -- selects effects of the vocabulary stepwise by one
+   criterion, the BIC of a block-mean Gaussian likelihood in which
+   deterministic effects are regressors and flicker / random walk are
+   covariance terms, on the *selection runs* only
+   (:class:`gyrocomp.diagnose.select.Search`); a noise term must also show
+   its own signature there (:func:`gyrocomp.diagnose.signature.check`);
 2. **how far** -- measures the scalar gap of :mod:`gyrocomp.diagnose.gap`
    for the baseline, for every candidate alone and for the selected model,
-   on the fit and on the holdout recording;
+   on the fit recording and on a holdout that took no part in the
+   selection. The protocol (``gap.protocol``): with one holdout the
+   selection sees the fit run only; with several (``--holdout A --holdout
+   B``) it sees the fit run and all holdouts but the last, and the gap is
+   reported on the last;
 3. **where** -- breaks the residual down by regime, timescale and EMD
    component (:mod:`gyrocomp.diagnose.localize`);
 4. **what it could have missed** -- for every candidate not selected, the
@@ -31,6 +36,12 @@ fitted on block means, also absorbs whatever drift a model leaves out (the
 baseline's then reads a quarter of the real Allan deviation at short tau),
 which would hide that drift from the gap.
 
+Every recording is averaged to at most ``max_rate_hz`` at entry
+(:func:`reduce_recording`), before anything else: the likelihood works on
+block means of 10 s or more and the gap on Allan taus from 1 s, so the
+cost does not grow with the sample rate. The sample-level white level of
+the full-rate recording is kept beside it (``blocks.arw_sample``).
+
 A recording without temperature (a static run) is diagnosed on its
 stochastic part and time effects only; the temperature effects are listed
 as skipped with the reason.
@@ -40,19 +51,21 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 
 import numpy as np
 
 from gyrocomp.config import bind, check_tables, load_config, settings_dict
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
+from gyrocomp.diagnose import signature as _signature
 from gyrocomp.diagnose import unexplained as _unexplained
 from gyrocomp.diagnose.detectability import detection_limit
 from gyrocomp.diagnose.effects import EFFECTS, NEEDS_TEMPERATURE, Run, TemperatureScale, effect_params
-from gyrocomp.diagnose.select import Fitted, Problem, greedy, holdout_fit, residual_of, sample_arw
+from gyrocomp.diagnose.select import Fitted, Problem, Search, extend, fit_baseline, holdout_fit, residual_of, sample_arw
 from gyrocomp.errors import InputError
 
-__all__ = ["DiagnoseSettings", "get_config", "diagnose", "problems", "SCHEMA", "EFFECTS"]
+__all__ = ["DiagnoseSettings", "get_config", "diagnose", "problems", "reduce_recording", "SCHEMA", "EFFECTS"]
 
 SCHEMA = "gyrocomp.diagnosis"
 
@@ -64,8 +77,8 @@ class DiagnoseSettings:
     poly_degree: int = 3
     block_s: float = 10.0
     max_blocks: int = 720
+    max_rate_hz: float = 1.0
     bic_margin: float = 10.0
-    holdout_margin: float = 6.0
     detection_power: float = 0.95
     max_effects: int = 8
     min_temperature_span_c: float = 2.0
@@ -73,7 +86,7 @@ class DiagnoseSettings:
     thermal_lag_tau_s: tuple = (2.0, 28800.0)
     warmup_tau_s: tuple = (60.0, 14400.0)
     tau_grid_points: int = 24
-    hysteresis_deadband_c: tuple = (0.25, 0.5, 1.0, 2.0, 4.0)
+    hysteresis_deadband_c: tuple = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
     periodic_min_blocks: float = 4.0
     periodic_oversample: float = 3.0
     gap_block_s: float = 100.0
@@ -86,7 +99,7 @@ class DiagnoseSettings:
     emd_max_sift: int = 50
 
     def __post_init__(self):
-        for name in ("block_s", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks", "temperature_bin_c"):
+        for name in ("block_s", "max_rate_hz", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks", "temperature_bin_c"):
             if not getattr(self, name) > 0:
                 raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be > 0")
         if not 0 <= self.poly_degree <= 3:
@@ -112,6 +125,7 @@ def diagnose(
     start_effects=(),
     callback=None,
     unexplained_settings: _unexplained.UnexplainedSettings = _unexplained.UnexplainedSettings(),
+    signature_settings: _signature.SignatureSettings = _signature.SignatureSettings(),
 ) -> dict:
     """Diagnose the gap between recordings and the calibrated baseline simulator.
 
@@ -119,9 +133,10 @@ def diagnose(
     ----------
     fit : gyrocomp.recordings.Recording
         The recording the model is calibrated on.
-    holdout : gyrocomp.recordings.Recording, optional
-        A second run of the same gyro, never used for fitting; it checks
-        every selection and measures the held-out gap.
+    holdout : gyrocomp.recordings.Recording or sequence of them, optional
+        Other runs of the same gyro. The last one takes no part in the
+        selection and gives the held-out gap; the ones before it join the
+        fit run in the selection (:class:`gyrocomp.diagnose.select.Search`).
     settings : DiagnoseSettings
     start_effects : sequence of str
         Effects the starting simulator already has (``--sim``): fitted as
@@ -130,13 +145,16 @@ def diagnose(
         Progress over candidate fits.
     unexplained_settings : gyrocomp.diagnose.unexplained.UnexplainedSettings
         The residual tests after selection.
+    signature_settings : gyrocomp.diagnose.signature.SignatureSettings
+        The check a noise term must pass on the selection runs to be selected.
 
     Returns
     -------
     dict
         The report body (see :func:`gyrocomp.diagnose.report.to_json`):
-        ``selected_effects``, ``gap``, ``candidates``, ``localization``,
-        ``skipped``, ``models``, ``unexplained``.
+        ``selected_effects``, ``gap`` (with its ``protocol``),
+        ``candidates``, ``localization``, ``skipped``, ``models``,
+        ``unexplained``.
 
     Raises
     ------
@@ -150,16 +168,26 @@ def diagnose(
     unknown = [e for e in start_effects if e not in EFFECTS]
     if unknown:
         raise InputError(f"start effects {unknown}: not in the vocabulary {', '.join(EFFECTS)}")
-    if holdout is not None and (fit.temperature_c is None) != (holdout.temperature_c is None):
-        raise InputError(f"{holdout.name}: temperature column present in only one of the fit and holdout recordings")
-    fit_p, hold_p, skipped = problems(fit, holdout, s)
+    holdouts = _as_list(holdout)
+    for rec in holdouts:
+        if (fit.temperature_c is None) != (rec.temperature_c is None):
+            raise InputError(f"{rec.name}: temperature column present in only one of the fit and holdout recordings")
+    fit_p, extra_p, skipped = problems(fit, holdouts, s)
+    selection = [fit_p] + extra_p[:-1]
+    hold_p = extra_p[-1] if extra_p else None
     candidates = [e for e in EFFECTS if e not in skipped and e not in start_effects]
+
+    def admissible(runs, model, effect):
+        return _signature.check(effect, runs, model, signature_settings).ok
+
     with threadpool_limits(limits=1, user_api="blas"):
         start = _start_model(fit_p, start_effects)
-        selected, first_step, steps, baseline = greedy(fit_p, hold_p, candidates, callback=callback, start=start)
+        search = Search(selection, candidates, start=start, admissible=admissible, callback=callback)
+        selected = search.run()
+        baseline, first_step, steps = search.baseline, search.first_step, search.steps
         models = {"baseline": baseline, "selected": selected}
         white = sample_arw(fit_p.run)
-        gapped = fit_p.run.gapped or (hold_p is not None and hold_p.run.gapped)
+        gapped = any(p.run.gapped for p in [fit_p] + extra_p)
         gaps = {name: _gaps(fit_p, hold_p, m, white, gapped) for name, m in models.items()}
         cand = {}
         for effect, model in first_step.items():
@@ -168,14 +196,13 @@ def diagnose(
                 "params": effect_params(effect, model.spec, model.beta, model.names, model.noise),
                 "gap_fit": g["fit"]["total"],
                 "gap_holdout": g["holdout"]["total"] if hold_p is not None else None,
-                "delta_bic": model.bic - start.bic,
+                "delta_bic": search.score(model) - search.score(start),
             }
-        runs = [fit_p] + ([hold_p] if hold_p is not None else [])
         for effect, c in cand.items():
             c["detection_limit"] = (
                 None
                 if effect in selected.order
-                else detection_limit(runs, selected, effect, first_step[effect].spec.get(effect, {}), s.bic_margin, s.detection_power)
+                else detection_limit(selection, selected, effect, first_step[effect].spec.get(effect, {}), s.bic_margin, s.detection_power)
             )
         local = {} if gapped else _localization(fit_p, hold_p, models, gaps, s, white)
         labelled = [("fit", fit_p)] + ([("holdout", hold_p)] if hold_p is not None else [])
@@ -186,22 +213,24 @@ def diagnose(
             None if gapped else [gaps["baseline"][label]["residual"] for label, _ in labelled],
         )
     order = [e for e in selected.order if e not in start_effects]
+    gap = {
+        name: {
+            "fit": g["fit"]["total"],
+            "holdout": g["holdout"]["total"] if hold_p is not None else None,
+            "parts": {
+                run: {k: g[run][k] for k in ("deterministic", "stochastic", "noise_floor", "noise_level")}
+                for run in ("fit", "holdout")
+                if g[run] is not None
+            },
+            **({"explained": not verdict["present"]} if name == "selected" else {}),
+        }
+        for name, g in gaps.items()
+    }
+    gap["protocol"] = _protocol(selection, hold_p)
     return {
         "selected_effects": order,
         "start_effects": list(start_effects),
-        "gap": {
-            name: {
-                "fit": g["fit"]["total"],
-                "holdout": g["holdout"]["total"] if hold_p is not None else None,
-                "parts": {
-                    run: {k: g[run][k] for k in ("deterministic", "stochastic", "noise_floor", "noise_level")}
-                    for run in ("fit", "holdout")
-                    if g[run] is not None
-                },
-                **({"explained": not verdict["present"]} if name == "selected" else {}),
-            }
-            for name, g in gaps.items()
-        },
+        "gap": gap,
         "unexplained": verdict,
         **(
             {"gap_note": "recording in segments with gaps: the scalar gap and the localization need a contiguous record "
@@ -218,24 +247,35 @@ def diagnose(
             "block_s": fit_p.run.block_s,
             "n_fit": fit_p.y.size,
             "n_holdout": hold_p.y.size if hold_p else None,
-            "segments": {"fit": len(segment_lengths(fit)), "holdout": len(segment_lengths(holdout)) if holdout is not None else None},
+            "segments": {"fit": len(segment_lengths(fit)), "holdout": len(segment_lengths(holdouts[-1])) if holdouts else None},
+            "fs_hz": fit.fs_hz,
+            "reduced_fs_hz": fit_p.run.fs_hz,
+            "arw_sample": {"fit": fit_p.run.arw_sample, "holdout": hold_p.run.arw_sample if hold_p else None},
         },
         "settings": settings_dict(s),
     }
 
 
-def problems(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings()):
+def problems(fit, holdouts=(), settings: DiagnoseSettings = DiagnoseSettings()):
     """The fit and holdout recordings prepared for the likelihood.
 
     The temperature effects are skipped without a temperature column or when
     the fit run's temperature spans less than ``min_temperature_span_c``;
     blocks are ``block_s`` long, or longer so that a run has at most
-    ``max_blocks`` of them.
+    ``max_blocks`` of them; every run is averaged to at most ``max_rate_hz``
+    at entry (:func:`reduce_recording`).
+
+    Parameters
+    ----------
+    fit : gyrocomp.recordings.Recording
+    holdouts : Recording or sequence of Recording
+    settings : DiagnoseSettings
 
     Returns
     -------
     fit_p : Problem
-    hold_p : Problem or None
+    holdout_ps : list of Problem
+        One per holdout, in order.
     skipped : dict
         ``{effect: reason}`` for the effects that cannot be diagnosed.
     """
@@ -253,7 +293,7 @@ def problems(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings())
     use_temp = has_temp and not skipped
     degree = s.poly_degree if use_temp else 0
     scale = TemperatureScale.of(fit.temperature_c) if use_temp else None
-    recs = [fit] + ([holdout] if holdout is not None else [])
+    recs = [fit] + _as_list(holdouts)
     block_s = max(s.block_s, (fit.time_s.size / fit.fs_hz) / s.max_blocks)
     if any(len(segment_lengths(r)) > 1 for r in recs):
         reason = (
@@ -262,9 +302,66 @@ def problems(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings())
         )
         skipped.update({e: reason for e in GAPPED_SKIP if e not in skipped})
         block_s = min(block_s, min(_block_limit(r) for r in recs))
-    fit_p = Problem(_run(fit, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree)
-    hold_p = Problem(_run(holdout, block_s, use_temp, s.temp_rate_smooth_s), s, scale, degree) if holdout is not None else None
-    return fit_p, hold_p, skipped
+    fit_p, *hold_ps = (Problem(_run(rec, block_s, use_temp, s), s, scale, degree) for rec in recs)
+    return fit_p, hold_ps, skipped
+
+
+def reduce_recording(time_s, rate_dps, temperature_c, fs_hz, m):
+    """Means of consecutive groups of `m` samples (the tail is dropped): the recording at ``fs / m``.
+
+    The likelihood works on block means, which are exactly means of these
+    means when a block is a whole number of groups; the deterministic shapes
+    are evaluated on the group-mean time and temperature, whose error is of
+    second order in the temperature's curvature over ``m / fs`` seconds.
+
+    Parameters
+    ----------
+    time_s, rate_dps : ndarray, shape (n,)
+    temperature_c : ndarray, shape (n,), or None
+    fs_hz : float
+    m : int
+        Samples per group (1 returns the inputs themselves).
+
+    Returns
+    -------
+    time_s, rate_dps, temperature_c : ndarray (temperature None when absent)
+    fs_hz : float
+        ``fs / m``.
+    """
+    if m == 1:
+        return time_s, rate_dps, temperature_c, fs_hz
+    k = time_s.size // m
+
+    def mean(x):
+        return None if x is None else np.asarray(x[: k * m], dtype=float).reshape(k, m).mean(axis=1)
+
+    return mean(time_s), mean(rate_dps), mean(temperature_c), fs_hz / m
+
+
+def _group(n_per, fs_hz, max_rate_hz) -> int:
+    """The largest divisor of `n_per` samples per block that averages to at most `max_rate_hz`."""
+    most = max(1, int(np.floor(fs_hz / max_rate_hz + 1e-9)))
+    return max(d for d in range(1, min(most, n_per) + 1) if n_per % d == 0)
+
+
+def _as_list(holdout) -> list:
+    """None, one recording or a sequence of them, as a list."""
+    if holdout is None:
+        return []
+    return list(holdout) if isinstance(holdout, (list, tuple)) else [holdout]
+
+
+def _protocol(selection, hold_p) -> dict:
+    """Which runs selected the effects and which one the held-out gap comes from."""
+    names = [os.path.basename(p.run.name) for p in selection]
+    held = os.path.basename(hold_p.run.name) if hold_p is not None else None
+    if hold_p is None:
+        text = "no holdout: effects selected on the fit run; no held-out gap"
+    elif len(selection) == 1:
+        text = f"effects selected on the fit run only; the held-out gap is from {held}, which took no part in the selection"
+    else:
+        text = f"effects selected on {' + '.join(names)}; the held-out gap is from {held}, which took no part in the selection"
+    return {"selection_runs": names, "holdout_run": held, "description": text}
 
 
 GAPPED_SKIP = ("thermal_lag", "temp_rate", "hysteresis", "periodic")
@@ -286,8 +383,9 @@ def _block_limit(rec) -> float:
     return float(lengths[lengths >= 0.5 * np.median(lengths)].min() / rec.fs_hz)
 
 
-def _run(rec, block_s, use_temp, smooth_s) -> Run:
-    """`rec` as a :class:`Run`: contiguous, or the whole blocks of each segment (none spans a gap)."""
+def _run(rec, block_s, use_temp, s) -> Run:
+    """`rec` as a :class:`Run`: contiguous, or the whole blocks of each segment (none spans a gap),
+    averaged to at most ``max_rate_hz`` (groups within blocks, so none spans a gap either)."""
     n_per = max(1, int(round(block_s * rec.fs_hz)))
     lengths = segment_lengths(rec)
     gapped = len(lengths) > 1
@@ -304,12 +402,14 @@ def _run(rec, block_s, use_temp, smooth_s) -> Run:
             + "; the diagnosis needs at least 16"
         )
     temperature = rec.temperature_c[keep] if use_temp else None
-    return Run(rec.name, rec.time_s[keep], rec.rate_dps[keep], temperature, rec.fs_hz, n_per, smooth_s, gapped)
+    full = Run(rec.name, rec.time_s[keep], rec.rate_dps[keep], temperature, rec.fs_hz, n_per, s.temp_rate_smooth_s, gapped)
+    m = _group(n_per, rec.fs_hz, s.max_rate_hz)
+    time_s, rate_dps, temperature, fs_hz = reduce_recording(full.time_s, full.rate_dps, temperature, rec.fs_hz, m)
+    arw = sample_arw(full)
+    return Run(rec.name, time_s, rate_dps, temperature, fs_hz, n_per // m, s.temp_rate_smooth_s, gapped, arw)
 
 
 def _start_model(problem: Problem, start_effects) -> Fitted:
-    from gyrocomp.diagnose.select import extend, fit_baseline
-
     model = fit_baseline(problem)
     for effect in start_effects:
         model = extend(problem, model, effect)

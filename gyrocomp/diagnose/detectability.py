@@ -241,7 +241,8 @@ def detection_limit(runs, model, effect, shape, bic_margin, power=0.95):
         # Not monotonic: a very slow element barely moves, and a constant
         # element temperature is absorbed by the offset. The limit is the
         # first crossing on a log grid, refined.
-        grid = np.linspace(np.log(fit.run.block_s / 10.0), np.log(1e5), 25)
+        # The range the selection searches (the registry's grid, configs/diagnose.toml).
+        grid = np.log(KINDS[effect].grid(fit.settings, fit.run.n_blocks * fit.run.block_s, fit.run.block_s))
         hits = np.flatnonzero(np.array([lag_evidence(z) for z in grid]) >= target)
         if hits.size == 0:
             return None

@@ -83,6 +83,9 @@ class Run:
     gapped : bool
         The samples are whole blocks of segments with gaps between them
         (``time_s`` jumps at a gap; no block spans one).
+    arw_sample : float or None
+        White level ``N`` [deg/s/sqrt(Hz)] of the recording at its own
+        sample rate, before any reduction (:func:`gyrocomp.diagnose.select.sample_arw`).
     """
 
     name: str
@@ -93,6 +96,7 @@ class Run:
     n_per_block: int
     rate_smooth_s: float = 0.0
     gapped: bool = False
+    arw_sample: float | None = None
 
     @property
     def block_s(self) -> float:

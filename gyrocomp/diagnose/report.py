@@ -36,6 +36,9 @@ def to_markdown(report: dict) -> str:
         g = report["gap"][name]
         lines.append(f"| {name} | {_fmt(g['fit'])} | {_fmt(g['holdout'])} |")
     lines.append("| sampling noise (95 %) | {} | {} |".format(*_noise_levels(report)))
+    protocol = report["gap"].get("protocol")
+    if protocol:
+        lines += ["", f"Held-out protocol: {protocol['description']}."]
     if report.get("gap_note"):
         lines += ["", report["gap_note"] + "."]
     lines += [

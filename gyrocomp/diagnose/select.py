@@ -1,58 +1,54 @@
-"""Greedy forward selection of effects by BIC, with a held-out check.
+r"""Stepwise selection of effects by one criterion: BIC on the selection runs.
 
 Every model is the baseline (per-run offset, temperature polynomial, white
 noise) plus a set of effects; it is scored by the block-mean likelihood of
 :mod:`gyrocomp.diagnose.likelihood`, in which deterministic effects are
 regressors and ``bias_instability`` / ``rate_random_walk`` are noise terms.
-One step adds, for each remaining effect, that effect to the current model,
-fits its nonlinear parameter on a log grid (then a bounded refinement) with
-the noise held, and refits the noise terms by maximum likelihood. The effect
-with the lowest
 
-.. math:: \\mathrm{BIC} = -2 \\log L + k \\ln n_\\mathrm{blocks}
+**The criterion.** A model's score is its BIC on the *selection runs* (the
+fit run, plus the holdouts that take part in the selection; never the run
+the held-out gap is reported on):
 
-is kept when it lowers the BIC by more than `bic_margin` **and**, with a
-holdout recording, it lowers the holdout's ``-2 log L`` by more than
-`holdout_margin` (:func:`holdout_gain`: a noise term with its fitted value;
-a deterministic effect with its fitted shape, scaled on the holdout -- the
-check asks that the shape *replicate* in a run it never saw). Otherwise the
-next best effect is tried. A deterministic effect that passes both checks
-still waits when a noise term of the same step passes the fit check and
-explains the holdout better (:func:`_noise_rival`: a sinusoid or a ramp
-fitted to one run's slowest flicker wander). When none passes, no swap
-(below) helps and a holdout is given, an effect may still enter on the
-**joint** likelihood of both runs, which adds the evidence of the two: a deterministic effect with
-coefficients shared, offsets and noise realisations per run
-(:func:`joint_gain`; a random walk does not repeat between runs, a
-deterministic effect does), a noise term with its value shared
-(:func:`joint_noise_gain`). It must lower the joint BIC by more than
-`bic_margin` and each run must point the same way. Its parameters are
-still fitted on the fit run only, so the held-out gap stays a figure of
-parameters that never saw the holdout, though the holdout then took part in
-the selection. The selection stops when nothing passes. Adding a
-deterministic effect refits the nonlinear parameters of those already in
-(a warm-up fitted alone stretches its time constant over a ramp); a
-backward check drops effects that a newer one made redundant. With no
-effect kept the report names none: the baseline explains the recording.
+.. math:: \mathrm{BIC} = \sum_r -2 \log L_r + k \ln \sum_r n_r
 
-Greedy steps can stop at one noise term standing in for two causes (a
-random walk absorbing flicker and a warm-up or hysteresis: neither alone
-beats it), or at the look-alike of a deterministic effect. A swap step
-(:func:`_swap`) then tries replacing each selected noise term by the other
-noise term, a deterministic effect or both (kept when it lowers the BIC,
-and the BIC plus the holdout's ``-2 log L``), then each selected
-deterministic effect by another (kept when it lowers the joint BIC of both
-runs); every new effect must earn `bic_margin`. It returns to
-the forward steps; a set already visited ends the search. Swaps come before
-the joint criterion: a weak noise term admitted on two runs beside a
-stand-in would lock the stand-in in.
+with the deterministic coefficients shared by the runs, the per-run columns
+(offset, a sinusoid's phase) and the noise levels fitted on each run, ``k``
+counting each of those once per run (:meth:`Search.score`). An effect
+**earns its place** in a model when removing it raises the score by more
+than ``bic_margin`` (:meth:`Search.earns`), and a noise term must in
+addition pass the admissibility check given to the search (its own
+signature on the runs). Every move uses that one rule:
 
-Look-alikes are told apart by the likelihood of their shapes, not by a
-rule: thermal lag must reproduce the decaying transient after every step,
+* **forward** adds the candidate that lowers the score most, if it earns
+  its place;
+* **backward** drops, after each addition, an effect that no longer earns
+  its place (a random walk that stood in for a warm-up before the warm-up
+  was in);
+* **swap** replaces one selected effect by one or (for a noise term, which
+  can stand in for two causes) two others, when the new model scores lower
+  and every effect it brings earns its place.
+
+For one deterministic parameter on 720 blocks the margin of 10 asks for a
+``-2 log L`` drop of ``ln 720 + 10 = 16.6``: a false-alarm rate of
+``P(chi^2_1 > 16.6) = 4.6e-5`` per tried effect and move, at most about
+``4e-4`` over the eight candidates of a forward step (Bonferroni). For a
+noise term at the boundary of its range the null distribution is half a
+``chi^2_1`` (Self & Liang 1987), so the rate is halved.
+
+Adding a deterministic effect refits the nonlinear parameters of those
+already in (a warm-up fitted alone stretches its time constant over a
+ramp). Look-alikes are told apart by the likelihood of their shapes, not by
+a rule: thermal lag must reproduce the decaying transient after every step,
 temperature-rate sensitivity the square pulses of dT/dt that vanish in a
 soak, hysteresis an offset that holds through a soak; a rate ramp is a line
-in time while a random walk only widens the covariance, and flicker adds
-covariance at every lag while a random walk adds it mostly at long lags.
+in time while a random walk only widens the covariance.
+
+References
+----------
+.. [1] G. Schwarz, "Estimating the dimension of a model", Ann. Stat. 6(2), 461-464 (1978).
+.. [2] R. E. Kass, A. E. Raftery, "Bayes factors", JASA 90(430), 773-795 (1995).
+.. [3] S. G. Self, K.-Y. Liang, "Asymptotic properties of maximum likelihood
+   estimators and likelihood ratio tests under nonstandard conditions", JASA 82(398), 605-610 (1987).
 """
 
 from __future__ import annotations
@@ -62,31 +58,11 @@ import dataclasses
 import numpy as np
 from scipy import linalg, optimize
 
-from gyrocomp.diagnose.effects import (
-    DETERMINISTIC,
-    KINDS,
-    PER_RUN,
-    Run,
-    TemperatureScale,
-    design,
-    effect_columns,
-    n_params_runs,
-    periodic_block_means,
-)
-from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, fit_noise_runs, profile_deviance
+from gyrocomp.diagnose.effects import DETERMINISTIC, KINDS, PER_RUN, STOCHASTIC, Run, TemperatureScale, design, effect_columns, periodic_block_means
+from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 
-__all__ = [
-    "Fitted",
-    "Problem",
-    "fit_baseline",
-    "extend",
-    "holdout_fit",
-    "holdout_gain",
-    "joint_gain",
-    "joint_noise_gain",
-    "greedy",
-    "sample_arw",
-]
+__all__ = ["Fitted", "Problem", "Search", "fit_baseline", "extend", "holdout_fit", "residual_of", "sample_arw"]
+
 
 @dataclasses.dataclass(frozen=True)
 class Fitted:
@@ -199,49 +175,199 @@ def residual_of(problem: Problem, model: Fitted):
     return problem.run.rate_dps - X @ model.beta
 
 
-def greedy(fit: Problem, holdout: Problem | None, candidates, callback=None, start: Fitted | None = None):
-    """Forward selection with swaps (see the module docstring), from `start` (default: the baseline).
+class Search:
+    """Stepwise selection over the vocabulary, every move judged by one criterion (module docstring).
 
-    Returns
-    -------
-    selected : Fitted
-        The final model.
-    first_step : dict
-        ``{effect: Fitted}``: each candidate added alone to the baseline.
-    steps : list of dict
-        Per step: ``tried`` (each tried effect's ``delta_bic`` and
-        ``delta_holdout_deviance``, None where the fit check already failed),
-        ``accepted`` (or None) and ``dropped`` (by the backward check); a
-        swap step has ``swapped`` (``{"out": [...], "in": [...]}``) instead.
+    Parameters
+    ----------
+    runs : sequence of Problem
+        The selection runs: the fit run first (the parameters are fitted on
+        it), then any holdouts that take part in the selection.
+    candidates : sequence of str
+        Effects that may be added.
+    start : Fitted, optional
+        The model to start from (default: the baseline of the fit run); its
+        effects are never dropped.
+    admissible : callable(runs, model, effect) -> bool, optional
+        The noise-signature check a noise term must pass to take the blame
+        (the level agrees between runs, the increments look like that
+        noise, its Allan slope holds); without one every noise term is
+        admissible.
+    callback : callable(done, total), optional
+        Progress over candidate fits.
+
+    Attributes
+    ----------
+    model : Fitted
+        The current model (the selected one after :meth:`run`).
     baseline : Fitted
-        The model the selection started from.
+    first_step : dict
+        ``{effect: Fitted}``: each candidate added alone to the start model.
+    steps : list of dict
+        One record per move: ``move`` (forward, backward, swap), ``delta``
+        (each tried effect's score change, forward), ``accepted``,
+        ``dropped``, ``swapped`` (``{"out", "in", "delta"}``).
     """
-    s = fit.settings
-    baseline = start if start is not None else fit_baseline(fit)
-    current = baseline
-    first_step, steps = {}, []
-    progress = _Progress(callback, len(candidates))
-    seen = {_key(current)}
-    for _ in range(2 * len(candidates) + 1):
-        current = _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress, joint=False)
-        swapped = _swap(fit, holdout, baseline, current, candidates, progress)
-        if swapped is not None and _key(swapped[0]) not in seen:
-            current, step = swapped
-            seen.add(_key(current))
-            steps.append(step)
-            continue
-        if holdout is None:
-            break
-        # Only when neither a forward step nor a swap helps does the joint
-        # likelihood of both runs get its say: a weak noise term entering
-        # beside a stand-in would otherwise lock the stand-in in.
-        joined = _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress, joint=True)
-        if _key(joined) in seen:
-            break
-        current = joined
-        seen.add(_key(current))
-    progress.finish()
-    return current, first_step, steps, baseline
+
+    def __init__(self, runs, candidates, start: Fitted | None = None, admissible=None, callback=None):
+        self.runs = list(runs)
+        self.fit = self.runs[0]
+        s = self.fit.settings
+        self.margin = s.bic_margin
+        self.max_effects = s.max_effects
+        self.candidates = list(candidates)
+        self.baseline = start if start is not None else fit_baseline(self.fit)
+        self.model = self.baseline
+        self.admissible = admissible
+        self.first_step, self.steps = {}, []
+        self._progress = _Progress(callback, len(self.candidates))
+        self._scores = {}
+
+    # -- the criterion -------------------------------------------------------------------------
+
+    def score(self, model: Fitted) -> float:
+        """BIC of `model` on the selection runs.
+
+        One run: ``model.bic``. Several: ``-2 log L`` summed over the runs at
+        deterministic coefficients shared by them (each run's per-run columns
+        and noise levels its own, :func:`_with_own_noise`), plus
+        ``k ln(total blocks)`` with ``k`` the model's parameters, the per-run
+        columns and noise levels counted once per run.
+        """
+        key = _key(model)
+        if key not in self._scores:
+            if len(self.runs) == 1:
+                value = model.bic
+            else:
+                parts = [_JointPart(self.fit, model, None)]
+                parts += [_JointPart(p, _with_own_noise(p, model), None) for p in self.runs[1:]]
+                deviance = float(_joint_deviance(parts, None, None).sum())
+                n_noise = 1 + sum(e in STOCHASTIC for e in model.order)
+                per_run = sum(n in PER_RUN for n in model.names)
+                k = model.n_params + (len(self.runs) - 1) * (n_noise + per_run)
+                value = deviance + k * np.log(sum(p.y.size for p in self.runs))
+            self._scores[key] = (model, value)
+        return self._scores[key][1]
+
+    def earns(self, model: Fitted, effect: str) -> bool:
+        """Whether `effect` earns its place in `model`: removing it raises the score by more than the margin,
+        and a noise term passes the admissibility check."""
+        if not self._admissible(model, effect):
+            return False
+        return self.score(self.without(model, effect)) - self.score(model) > self.margin
+
+    def without(self, model: Fitted, effect: str) -> Fitted:
+        """`model` refitted without `effect` (the others' nonlinear parameters kept)."""
+        order = tuple(e for e in model.order if e != effect)
+        spec = {k: v for k, v in model.spec.items() if k != effect}
+        return _refit(self.fit, self.baseline, order, spec, model.noise)
+
+    # -- the moves ----------------------------------------------------------------------------
+
+    def forward(self) -> bool:
+        """Add the candidate that lowers the score most, if it earns its place; then :meth:`backward`."""
+        remaining = [e for e in self.candidates if e not in self.model.order]
+        if not remaining or len(self.model.order) - len(self.baseline.order) >= self.max_effects:
+            return False
+        trials = {}
+        for k, effect in enumerate(remaining):
+            trials[effect] = extend(self.fit, self.model, effect)
+            self._progress.tick(len(remaining) - k - 1)
+        if self.model is self.baseline:
+            self.first_step.update(trials)
+        current = self.score(self.model)
+        delta = {e: self.score(m) - current for e, m in trials.items()}
+        accepted = None
+        for effect in sorted(delta, key=delta.get):
+            # Adding `effect` earns its place iff the model without it scores
+            # more than the margin higher: the inequality of `earns`.
+            if delta[effect] >= -self.margin:
+                break
+            if self._admissible(trials[effect], effect):
+                accepted = effect
+                break
+        self.steps.append({"move": "forward", "delta": delta, "accepted": accepted, "dropped": []})
+        if accepted is None:
+            return False
+        self.model = trials[accepted]
+        self.backward(accepted)
+        return True
+
+    def backward(self, added: str | None = None) -> list:
+        """Drop, one at a time, the effects (other than `added` and the start model's) that no longer earn their place."""
+        dropped = []
+        changed = True
+        while changed:
+            changed = False
+            for effect in self.model.order[len(self.baseline.order) :]:
+                if effect != added and not self.earns(self.model, effect):
+                    self.model = self.without(self.model, effect)
+                    dropped.append(effect)
+                    changed = True
+                    break
+        if dropped:
+            self.steps.append({"move": "backward", "accepted": None, "dropped": dropped})
+        return dropped
+
+    def swap(self, seen=frozenset()) -> bool:
+        """Replace one selected effect by one other, or a noise term by a noise term and a deterministic effect.
+
+        Greedy steps can stop at one effect standing in for another (a random
+        walk absorbing a warm-up and flicker: neither true cause alone beats
+        it, both together do; a short thermal lag that is, on one run, a
+        temperature-rate term to first order). The replacement with the
+        lowest score is taken when it scores below the current model, every
+        effect it brings earns its place, and its set of effects is not in
+        `seen`.
+        """
+        chosen = self.model.order[len(self.baseline.order) :]
+        spare = [e for e in self.candidates if e not in self.model.order]
+        best, best_score = None, self.score(self.model)
+        for out in chosen:
+            reduced = self.without(self.model, out)
+            options = []
+            for d in spare:
+                single = extend(self.fit, reduced, d)
+                self._progress.tick()
+                options.append((single, (d,)))
+                if out in STOCHASTIC and d in STOCHASTIC:
+                    for d2 in (e for e in spare if e in DETERMINISTIC):
+                        options.append((extend(self.fit, single, d2), (d, d2)))
+                        self._progress.tick()
+            for option, brought in options:
+                if frozenset(option.order) in seen or self.score(option) >= best_score:
+                    continue
+                if all(self.earns(option, e) for e in brought):
+                    best, best_score = (option, out, brought), self.score(option)
+        if best is None:
+            return False
+        option, out, brought = best
+        self.steps.append(
+            {
+                "move": "swap",
+                "accepted": None,
+                "dropped": [],
+                "swapped": {"out": [out], "in": list(brought), "delta": best_score - self.score(self.model)},
+            }
+        )
+        self.model = option
+        self.backward()
+        return True
+
+    def run(self) -> Fitted:
+        """Forward steps until none earns its place, then a swap, and again; a set of effects seen before ends it."""
+        seen = {frozenset(self.model.order)}
+        for _ in range(2 * len(self.candidates) + 1):
+            while self.forward():
+                seen.add(frozenset(self.model.order))
+            if not self.swap(seen):
+                break
+            seen.add(frozenset(self.model.order))
+        self._progress.finish()
+        return self.model
+
+    def _admissible(self, model, effect):
+        return effect not in STOCHASTIC or self.admissible is None or bool(self.admissible(self.runs, model, effect))
 
 
 class _Progress:
@@ -262,251 +388,7 @@ class _Progress:
 
 
 def _key(model: Fitted):
-    return frozenset(model.order)
-
-
-def _forward(fit, holdout, baseline, current, candidates, steps, first_step, progress, joint):
-    """Add effects while one passes both checks (or, with `joint`, the joint criterion); drop those a newer one made redundant."""
-    s = fit.settings
-    remaining = [e for e in candidates if e not in current.order]
-    while remaining and len(current.order) - len(baseline.order) < s.max_effects:
-        trials = {}
-        for k, effect in enumerate(remaining):
-            trials[effect] = extend(fit, current, effect)
-            progress.tick(len(remaining) - k - 1)
-        if current is baseline:
-            first_step.update(trials)
-        record = {}
-        accepted = None
-        for effect in sorted(trials, key=lambda e: trials[e].bic):
-            model = trials[effect]
-            delta_bic = model.bic - current.bic
-            delta_hold = None
-            passed = delta_bic < -s.bic_margin
-            if passed and holdout is not None:
-                delta_hold = holdout_gain(holdout, current, model, effect)
-                passed = delta_hold < -s.holdout_margin
-            record[effect] = {"delta_bic": delta_bic, "delta_holdout_deviance": delta_hold}
-            if passed and holdout is not None and effect in DETERMINISTIC:
-                rival = _noise_rival(fit, holdout, current, trials, effect)
-                if rival is not None:
-                    record[effect]["noise_explains_holdout_better"] = rival
-                    passed = False
-            if passed:
-                accepted = effect
-                break
-        if accepted is None and joint:
-            accepted = _joint_pass(fit, holdout, current, trials, record)
-        steps.append({"tried": record, "accepted": accepted, "dropped": []})
-        if accepted is None:
-            break
-        current = trials[accepted]
-        remaining.remove(accepted)
-        current, dropped = _backward(fit, holdout, baseline, current, accepted, s.bic_margin)
-        if dropped:
-            steps[-1]["dropped"] = dropped
-            remaining += [e for e in dropped if e not in remaining]
-    return current
-
-
-def _noise_rival(fit, holdout, current, trials, effect):
-    """The noise term of this step that explains the holdout better than deterministic `effect`, or None.
-
-    Flicker or a random walk puts power at every slow frequency; within one
-    run, a sinusoid, a warm-up or a ramp fitted to the slowest wander can
-    beat it by BIC, and its shape (the phase of a sinusoid is re-estimated
-    per run) replicates on the holdout's own wander. On the holdout, though,
-    the noise term explains the new wander at every frequency while the
-    shape explains one: a noise trial that passes the fit run's BIC check
-    and gives the holdout a lower ``-2 log L`` (both models frozen, per-run
-    columns refitted) is preferred, and the shape waits for a later step,
-    where it is judged beside that noise term.
-    """
-    s = fit.settings
-    hold_effect = holdout_fit(holdout, trials[effect])[0]
-    best = None
-    for name, model in trials.items():
-        if name in DETERMINISTIC or model.bic - current.bic >= -s.bic_margin:
-            continue
-        dev = holdout_fit(holdout, model)[0]
-        if dev < hold_effect and (best is None or dev < best[1]):
-            best = (name, dev)
-    return None if best is None else best[0]
-
-
-def _joint_pass(fit, holdout, current, trials, record):
-    """The effect that the joint criterion of both runs accepts, or None.
-
-    Tried after no effect passes the fit-run BIC and holdout checks: an
-    effect qualifies when its joint BIC change (:func:`joint_gain` for a
-    deterministic effect, :func:`joint_noise_gain` for a noise term) is
-    below ``-bic_margin`` and each run on its own points the same way: at
-    the joint estimate, both runs' ``-2 log L`` drop (the holdout's with its
-    own noise: a random walk that one run's realisation barely shows must
-    not count against a ramp that both runs carry); the lowest joint BIC
-    wins.
-    """
-    s = fit.settings
-    best, best_gain = None, -s.bic_margin
-    for effect, model in trials.items():
-        if effect in DETERMINISTIC:
-            if model.deviance >= current.deviance:
-                continue
-            gain, per_run = joint_gain(fit, holdout, current, effect)
-        else:
-            gain, per_run = joint_noise_gain(fit, holdout, current, model, effect)
-        agrees = max(per_run) < 0.0
-        record[effect]["delta_joint_bic"] = gain
-        if gain < best_gain and agrees:
-            best, best_gain = effect, gain
-    return best
-
-
-def joint_noise_gain(fit: Problem, holdout: Problem, current: Fitted, model: Fitted, effect: str):
-    """Change of the joint BIC of fit and holdout from `current` to `model` (= `current` + noise `effect`).
-
-    The noise terms are properties of the gyro, shared by both runs and
-    fitted on the sum of their ``-2 log L`` (:func:`gyrocomp.diagnose.likelihood.fit_noise_runs`);
-    each run keeps its own regression coefficients (the nonlinear parameters
-    are the fit run's). Flicker or a random walk too weak to pass on one run
-    adds its evidence over two, as a deterministic effect does in
-    :func:`joint_gain`.
-
-    Returns
-    -------
-    gain : float
-        ``Delta(-2 log L) + k ln(n_fit + n_holdout)``.
-    per_run : tuple of float
-        Each run's ``-2 log L`` change at the jointly fitted terms; both
-        must be negative for the runs to agree.
-    """
-    runs = [(p.y, p.design_blocks(current.spec)[0], p.basis) for p in (fit, holdout)]
-    before = ("arw",) + tuple(e for e in current.order if e not in DETERMINISTIC)
-    noise0, dev0, _ = fit_noise_runs(runs, current.noise, before)
-    noise1, dev1, _ = fit_noise_runs(runs, model.noise, before + (effect,))
-    per_run = tuple(
-        profile_deviance(y, X, basis.whitener(noise1))[0] - profile_deviance(y, X, basis.whitener(noise0))[0]
-        for y, X, basis in runs
-    )
-    return dev1 - dev0 + KINDS[effect].n_params * np.log(fit.y.size + holdout.y.size), per_run
-
-
-def holdout_gain(problem: Problem, current: Fitted, model: Fitted, effect: str) -> float:
-    """Change of the holdout's ``-2 log L`` from `current` to `model` (= `current` + `effect`).
-
-    A noise term is checked with its fitted value frozen. A deterministic
-    effect is checked for **replication**: the change ``d`` of the frozen
-    prediction that the fit run's estimate brings is scaled by ``alpha >= 0``
-    fitted on the holdout (with the per-run columns), so the check asks
-    whether the shape found on the fit run is also in the held-out run,
-    without charging it the fit run's amplitude error. Under no effect,
-    ``d`` is independent of the holdout's noise and the drop is a one-sided
-    ``chi^2_1`` (P(drop > 6) = 0.007); a shape that merely absorbed the fit
-    run's noise wander (a warm-up fitted to a random walk) has
-    ``alpha ~ 0`` on an independent run.
-    """
-    base_dev = holdout_fit(problem, current)[0]
-    if effect not in DETERMINISTIC:
-        return holdout_fit(problem, model)[0] - base_dev
-    run = problem.run
-    fixed_c, _, _ = _holdout_parts(problem, current)
-    fixed_m, X_free, _ = _holdout_parts(problem, model)
-    y = problem.y - block_means(fixed_c, run.n_per_block)
-    free_b = block_means(X_free, run.n_per_block)
-    d = block_means(fixed_m - fixed_c, run.n_per_block)
-    w = problem.basis.whitener(model.noise)
-    dev0, _ = profile_deviance(y, free_b, w)
-    dev1, beta = profile_deviance(y, np.column_stack([free_b, d]), w)
-    return (dev1 if beta[-1] > 0 else dev0) - base_dev
-
-
-def _holdout_parts(problem: Problem, model: Fitted):
-    """Frozen full-rate prediction of `model` on a run, its per-run columns and their mask."""
-    X, names = design(problem.run, model.spec, problem.poly_degree, problem.scale)
-    if names != model.names:
-        raise ValueError(f"holdout design {names} differs from the fit design {model.names}")
-    free = np.array([n in PER_RUN for n in names])
-    return X[:, ~free] @ model.beta[~free], X[:, free], free
-
-
-def _swap(fit, holdout, baseline, current, candidates, progress):
-    """Replace a selected effect by a look-alike: a noise term by the other one and/or a deterministic effect, a deterministic effect by another.
-
-    Greedy selection can stop at a noise term that stands in for two
-    causes (one random walk absorbing flicker and a warm-up): neither true
-    cause alone beats it, both together do. Each selected noise term is
-    replaced by the other noise term, by one unselected deterministic effect,
-    or by both; the best replacement by BIC is taken when it lowers the BIC,
-    and the BIC plus the holdout's ``-2 log L`` (frozen parameters), below
-    the current model's, and every effect it brings in earns `bic_margin`
-    on its own. The sum lets the fit run's evidence outweigh a holdout that
-    is nearly indifferent (a slow thermal lag against the random walk it
-    replaces), while a shape that merely absorbed the fit run's wander
-    leaves the holdout's wander unexplained and costs far more there.
-
-    Failing that, each selected deterministic effect is replaced by one
-    unselected deterministic effect (near the edge a thermal lag of a few
-    seconds is, on one run, a temperature-rate term to first order); with a
-    holdout the replacement is judged on the joint BIC of both runs
-    (:func:`_joint_bic`: shapes shared, each run's noise its own, so a noise
-    level that one run's realisation sets low does not decide between two
-    shapes), without one on the BIC.
-
-    Returns
-    -------
-    (Fitted, dict) or None
-        The new model and its step record, or None when no swap improves.
-    """
-    s = fit.settings
-    chosen = current.order[len(baseline.order) :]
-    current_hold = holdout_fit(holdout, current)[0] if holdout is not None else 0.0
-    spare = [e for e in candidates if e in DETERMINISTIC and e not in current.order]
-    best = None
-    for out in (e for e in chosen if e not in DETERMINISTIC):
-        reduced = _refit(fit, baseline, tuple(e for e in current.order if e != out), current.spec, current.noise)
-        others = [e for e in candidates if e not in DETERMINISTIC and e not in current.order]
-        bases = [(reduced, ())] + [(extend(fit, reduced, o), (o,)) for o in others]
-        for model, added in bases:
-            options = [(model, added)] if added else []
-            for d in spare:
-                options.append((extend(fit, model, d), added + (d,)))
-                progress.tick()
-            for option, brought in options:
-                if option.bic >= current.bic or (best is not None and option.bic >= best[0].bic):
-                    continue
-                if not all(_earns(fit, baseline, option, e, s.bic_margin) for e in brought):
-                    continue
-                hold = holdout_fit(holdout, option)[0] if holdout is not None else 0.0
-                if option.bic + hold < current.bic + current_hold:
-                    best = (option, {"out": [out], "in": list(brought), "delta_bic": option.bic - current.bic,
-                                     "delta_holdout_deviance": hold - current_hold if holdout is not None else None})
-    if best is None:
-        score = (lambda m: _joint_bic(fit, holdout, m)) if holdout is not None else (lambda m: m.bic)
-        current_score = score(current) if any(e in DETERMINISTIC for e in chosen) else None
-        best_gain = 0.0
-        for out in (e for e in chosen if e in DETERMINISTIC):
-            order = tuple(e for e in current.order if e != out)
-            reduced = _refit(fit, baseline, order, {k: v for k, v in current.spec.items() if k != out}, current.noise)
-            for d in spare:
-                option = extend(fit, reduced, d)
-                progress.tick()
-                gain = score(option) - current_score
-                if gain < best_gain and _earns(fit, baseline, option, d, s.bic_margin):
-                    best_gain = gain
-                    best = (option, {"out": [out], "in": [d], "delta_bic": option.bic - current.bic})
-                    if holdout is not None:
-                        best[1]["delta_joint_bic"] = gain
-    if best is None:
-        return None
-    model, record = best
-    return model, {"tried": {}, "accepted": None, "dropped": [], "swapped": record}
-
-
-def _joint_bic(fit: Problem, holdout: Problem, model: Fitted) -> float:
-    """BIC of `model` on both runs: shared coefficients (per-run :data:`PER_RUN` columns, counted once per run), each run's noise fitted on it."""
-    parts = [_JointPart(fit, model, None), _JointPart(holdout, _with_own_noise(holdout, model), None)]
-    k = model.n_params + sum(n in PER_RUN for n in model.names)
-    return float(_joint_deviance(parts, None, None).sum()) + k * np.log(fit.y.size + holdout.y.size)
+    return (model.order, tuple(sorted((e, tuple(sorted(p.items()))) for e, p in model.spec.items())))
 
 
 def _with_own_noise(problem: Problem, model: Fitted) -> Fitted:
@@ -515,47 +397,6 @@ def _with_own_noise(problem: Problem, model: Fitted) -> Fitted:
     Xb, _ = problem.design_blocks(model.spec)
     noise, _, _ = fit_noise(problem.y, Xb, problem.basis, model.noise, stochastic)
     return dataclasses.replace(model, noise=noise)
-
-
-def _earns(problem, baseline, model, effect, margin):
-    """Whether removing `effect` from `model` raises the BIC by more than `margin`."""
-    order = tuple(e for e in model.order if e != effect)
-    spec = {k: v for k, v in model.spec.items() if k != effect}
-    return _refit(problem, baseline, order, spec, model.noise).bic > model.bic + margin
-
-
-def _backward(problem: Problem, holdout: Problem | None, baseline: Fitted, current: Fitted, added: str, margin: float):
-    """Drop earlier effects that the newly `added` one made redundant.
-
-    An effect selected early as a stand-in (a random walk absorbing a
-    warm-up and an interference before either was modelled) no longer earns
-    its BIC margin once the real cause is in; it is removed (stepwise
-    selection) and may be chosen again later. With a holdout, an effect that
-    still earns the margin on the joint BIC of both runs (:func:`joint_gain`,
-    :func:`joint_noise_gain`) stays.
-    """
-    dropped = []
-    changed = True
-    while changed:
-        changed = False
-        for effect in current.order[len(baseline.order) :]:
-            if effect == added:
-                continue
-            order = tuple(e for e in current.order if e != effect)
-            spec = {k: v for k, v in current.spec.items() if k != effect}
-            smaller = _refit(problem, baseline, order, spec, current.noise)
-            if smaller.bic < current.bic + margin and not (holdout is not None and _joint_earns(problem, holdout, smaller, current, effect, margin)):
-                current, changed = smaller, True
-                dropped.append(effect)
-                break
-    return current, dropped
-
-
-def _joint_earns(fit: Problem, holdout: Problem, smaller: Fitted, model: Fitted, effect: str, margin: float) -> bool:
-    """Whether `effect` (in `model`, not in `smaller`) lowers the joint BIC of both runs by more than `margin`."""
-    if effect in DETERMINISTIC:
-        return joint_gain(fit, holdout, smaller, effect)[0] < -margin
-    return joint_noise_gain(fit, holdout, smaller, model, effect)[0] < -margin
 
 
 def _refit(problem: Problem, baseline: Fitted, order: tuple, spec: dict, noise: NoiseModel) -> Fitted:
@@ -698,50 +539,6 @@ def _joint_deviance(parts, params, effect):
     r = y - X @ beta
     ends = np.cumsum([part.y_w.size for part in parts])[:-1]
     return np.array([c + float(rk @ rk) for c, rk in zip(constants, np.split(r, ends))])
-
-
-def joint_gain(fit: Problem, holdout: Problem, current: Fitted, effect: str):
-    """Change of the joint BIC of fit and holdout from `current` to `current` + deterministic `effect`.
-
-    The two runs are one gyro with two noise realisations: their
-    log-likelihoods add, with the deterministic coefficients (temperature
-    polynomial, effects) shared, the per-run columns (:data:`PER_RUN`)
-    separate and each run's noise terms those of `current` fitted on that
-    run (one realisation of a random walk can read larger). A random walk
-    does not repeat between runs, a deterministic effect does, so the sum
-    detects an effect that one run's wander hides. The effect's nonlinear
-    parameter is fitted on the sum, then those of the effects already in
-    (one coordinate-descent pass, as in :func:`extend`: a warm-up fitted
-    alone stretches its time constant over a ramp); the change is
-    ``Delta(-2 log L) + k ln(n_fit + n_holdout)``, with ``k`` from
-    :func:`gyrocomp.diagnose.effects.n_params_runs` (a sinusoid's amplitude
-    and phase, fitted per run, count twice).
-
-    The held-out gap of a model selected this way is no longer independent
-    of the selection (its parameters are still fitted on the fit run only).
-
-    Returns
-    -------
-    gain : float
-    per_run : tuple of float
-        Each run's ``-2 log L`` change at the joint coefficients; both must
-        be negative for the runs to agree.
-    """
-    on_holdout = _with_own_noise(holdout, current)
-
-    def runs_deviance(spec):
-        models = (dataclasses.replace(current, spec=spec), dataclasses.replace(on_holdout, spec=spec))
-        return _joint_deviance([_JointPart(fit, models[0], None), _JointPart(holdout, models[1], None)], None, None)
-
-    before = runs_deviance(current.spec)
-    spec = {**current.spec, effect: _best_nonlinear(fit, current, effect, ((holdout, on_holdout),))}
-    for other in current.spec:
-        if KINDS[other].nonlinear:
-            trial = dataclasses.replace(current, spec=spec)
-            spec[other] = _best_nonlinear(fit, trial, other, ((holdout, dataclasses.replace(on_holdout, spec=spec)),))
-    change = runs_deviance(spec) - before
-    n = fit.y.size + holdout.y.size
-    return float(change.sum() + n_params_runs(effect, 2) * np.log(n)), tuple(float(c) for c in change)
 
 
 def sample_arw(run: Run) -> float:

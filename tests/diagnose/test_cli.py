@@ -31,11 +31,13 @@ def test_help():
 
 
 def test_diagnose_writes_json_markdown_and_plot(tmp_path):
-    fit, hold = tmp_path / "fit.csv", tmp_path / "hold.csv"
+    """Two holdouts: the first joins the selection, the last gives the held-out gap (``gap.protocol``)."""
+    fit, extra, hold = tmp_path / "fit.csv", tmp_path / "extra.csv", tmp_path / "hold.csv"
     _write(fit, 1)
+    _write(extra, 3)
     _write(hold, 2)
     out = tmp_path / "report.json"
-    args = ["diagnose", str(fit), "--holdout", str(hold), "--out", str(out), "--plot", str(tmp_path / "gap.png"),
+    args = ["diagnose", str(fit), "--holdout", str(extra), "--holdout", str(hold), "--out", str(out), "--plot", str(tmp_path / "gap.png"),
             "--markdown", str(tmp_path / "report.md"), "--time-col", "t_ms", "--time-unit", "ms", "--rate-col", "gyro",
             "--temp-col", "temp"]
     result = runner.invoke(app, args)
@@ -43,7 +45,10 @@ def test_diagnose_writes_json_markdown_and_plot(tmp_path):
     report = json.loads(out.read_text())
     assert report["schema"]["name"] == "gyrocomp.diagnosis"
     assert report["selected_effects"] == []
-    assert set(report["gap"]) == {"baseline", "selected"}
+    assert set(report["gap"]) == {"baseline", "selected", "protocol"}
+    assert report["gap"]["protocol"]["selection_runs"] == ["fit.csv", "extra.csv"]
+    assert report["gap"]["protocol"]["holdout_run"] == "hold.csv"
+    assert [i["name"] for i in report["inputs"]] == ["fit.csv", "extra.csv", "hold.csv"]
     assert set(report["gap"]["baseline"]) >= {"fit", "holdout"}
     assert "thermal_lag" in report["candidates"] and "params" in report["candidates"]["thermal_lag"]
     assert set(report["localization"]) == {"fit", "holdout"}
@@ -55,6 +60,7 @@ def test_diagnose_writes_json_markdown_and_plot(tmp_path):
     assert all(limits.values()), limits
     assert f"slope_dps_per_s >= {limits['rate_ramp']['slope_dps_per_s']['value']:.3g} deg/s/s" in markdown
     assert "with probability 0.950" in markdown
+    assert "the held-out gap is from hold.csv, which took no part in the selection" in markdown
 
 
 def test_bad_input_exits_2(tmp_path):

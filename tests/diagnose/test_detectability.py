@@ -36,7 +36,7 @@ def problem():
     t = np.arange(N) / FS
     temperature = 25.0 + np.clip((t - 1800.0) / 60.0, 0.0, 40.0)
     frame = pd.DataFrame({"time": t, "rate": np.zeros(N), "temperature": temperature})
-    fit_p, _, _ = problems(recording_from_frame(frame, name="run"), None, DiagnoseSettings())
+    fit_p, _, _ = problems(recording_from_frame(frame, name="run"), [], DiagnoseSettings())
     return fit_p
 
 

@@ -95,7 +95,7 @@ def test_periodic_grid_deviances_equal_the_direct_fits():
         )
         for k in range(2)
     ]
-    fit_p, hold_p, _ = problems(*recs, DiagnoseSettings())
+    fit_p, (hold_p,), _ = problems(recs[0], recs[1:], DiagnoseSettings())
     model = select.extend(fit_p, select.fit_baseline(fit_p), "bias_instability")
     length = fit_p.y.size * fit_p.run.block_s
     periods = 1.0 / np.arange(2.0 / length, 1.0 / (4.0 * fit_p.run.block_s), 1.0 / length)  # a third of the selection's grid

@@ -43,10 +43,12 @@ def test_blocks_stay_within_segments():
     rec = _bursts(1, drop=(7,))
     assert len(rec.segments) == 29  # one burst left out: still one segment per burst
     fit_p, _, skipped = problems(_bursts(2), None)
-    assert fit_p.run.gapped and fit_p.y.size == 30 and fit_p.run.n_per_block == 250
-    # every block's samples are 250 consecutive samples of one burst (20 ms apart)
-    t = fit_p.run.time_s.reshape(30, 250)
-    np.testing.assert_allclose(np.diff(t, axis=1), 0.02, atol=1e-9)
+    # 50 Hz averaged to 1 Hz at entry (max_rate_hz) in groups of 50 within a burst: 5 per block
+    assert fit_p.run.gapped and fit_p.y.size == 30 and fit_p.run.n_per_block == 5
+    # every block's samples are 5 consecutive 1 s means of one burst
+    t = fit_p.run.time_s.reshape(30, 5)
+    np.testing.assert_allclose(np.diff(t, axis=1), 1.0, atol=1e-9)
+    np.testing.assert_allclose(fit_p.run.arw_sample, 0.005, rtol=0.05)
     assert set(skipped) >= {"thermal_lag", "temp_rate", "hysteresis", "periodic"}
     assert all("gaps" in why for why in skipped.values())
 

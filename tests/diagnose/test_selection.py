@@ -118,33 +118,3 @@ def test_static_recording_is_diagnosed_on_its_stochastic_part():
     report = diagnose(*recs)
     assert set(report["skipped"]) == {"thermal_lag", "temp_rate", "hysteresis"}
     assert report["selected_effects"] == ["bias_instability"]
-
-
-def test_joint_gain_of_a_repeated_run_doubles_its_evidence():
-    """Holdout = fit run + 0.3 deg/s: the joint ``-2 log L`` change is twice one run's.
-
-    Offsets are per run (a shared one would leave the 0.3 deg/s step in the
-    residual) and everything else shared, so two copies of one run carry
-    exactly twice its deviance change at the same (jointly fitted) warm-up
-    time constant; only the BIC penalty uses ``ln(2 n)``.
-    """
-    from gyrocomp.diagnose import DiagnoseSettings
-    from gyrocomp.diagnose.effects import Run
-    from gyrocomp.diagnose.likelihood import profile_deviance
-    from gyrocomp.diagnose.select import Problem, _best_nonlinear, fit_baseline, joint_gain
-
-    rng = np.random.default_rng(3)
-    t = np.arange(2 * 3600, dtype=float)
-    rate = 0.05 + 0.01 * np.exp(-t / 500.0) + rng.normal(0.0, 0.02, t.size)
-    problem = Problem(Run("a", t, rate, None, 1.0, 10), DiagnoseSettings(), None, 0)
-    base = fit_baseline(problem)
-    params = _best_nonlinear(problem, base, "warmup")
-    w = problem.basis.whitener(base.noise)
-    X, _ = problem.design_blocks({"warmup": params})
-    one_run = profile_deviance(problem.y, X, w)[0] - base.deviance
-    assert one_run < -50.0
-    n = 2 * problem.y.size
-    shifted = Problem(Run("b", t, rate + 0.3, None, 1.0, 10), DiagnoseSettings(), None, 0)
-    gain, per_run = joint_gain(problem, shifted, base, "warmup")
-    np.testing.assert_allclose(gain, 2.0 * one_run + 2.0 * np.log(n), rtol=1e-3)
-    np.testing.assert_allclose(per_run, [one_run, one_run], rtol=1e-3)
