@@ -179,12 +179,19 @@ class _Detector:
         self.gyro = _gyro(case)
         (fit, _, _), frame = simulate_pair(case, truth_columns=True)
         self.problem, _, _ = problems(fit, [], settings)
-        self.housing = frame["truth_temperature"].to_numpy()
+        # diagnose averages each run to at most max_rate_hz at entry: the truth on the same grid
+        m = int(round(case["fs_hz"] / self.problem.run.fs_hz))
+        k = self.problem.run.time_s.size
+
+        def reduced(column):
+            return frame[column].to_numpy()[: k * m].reshape(k, m).mean(axis=1)
+
+        self.housing = reduced("truth_temperature")
         self.unit = {}
         for e in case["effects"]:
             column = f"truth_{e}"
             if column in frame and e != "thermal_lag":
-                self.unit[e] = frame[column].to_numpy() / case["effects"][e][SCALE[e]]
+                self.unit[e] = reduced(column) / case["effects"][e][SCALE[e]]
         self.n_pair = 2 * self.problem.y.size
         self.margin = settings.bic_margin
 
