@@ -53,6 +53,7 @@ __all__ = [
     "Channel",
     "Recording",
     "TimeLimits",
+    "AxisLimits",
     "read_recording",
     "recording_from_frame",
     "RATE_UNITS",
@@ -116,6 +117,30 @@ class TimeLimits:
     max_fs_hz: float = 1e5
     max_span_days: float = 30.0
     typical_fs_hz: float = 100.0
+
+
+@dataclasses.dataclass(frozen=True)
+class AxisLimits:
+    """Largest magnitude a sensor axis can read (``configs/recordings.toml``, ``[axes]``).
+
+    A larger value is a corrupt cell or a unit mistake, refused naming the
+    file, the row and the column (a ±1e300 rate overflows every statistic).
+
+    Parameters
+    ----------
+    max_abs_deg_s : float, default=1e5
+        Angular rate [deg/s]: 25x the widest MEMS gyro full scale (±4000 deg/s).
+    max_abs_m_s2 : float, default=1e5
+        Acceleration [m/s^2], about 10 000 g: 25x the widest IMU accelerometer
+        full scale (±400 g).
+    """
+
+    max_abs_deg_s: float = 1e5
+    max_abs_m_s2: float = 1e5
+
+    def bound(self, unit: str) -> float:
+        """The bound of a recording unit (``deg/s`` or ``m/s^2``)."""
+        return self.max_abs_deg_s if unit == "deg/s" else self.max_abs_m_s2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -571,6 +596,7 @@ def recording_from_frame(
         quantity, canonical, factor = _unit_of(unit)
         values = _numeric_column(frame[src], src, locate)
         out[src] = _own(values, _owned) if factor == 1.0 else values * factor
+        _check_axis(out[src], src, canonical, unit, factor, locate)
         axes.append(Channel(src, src, quantity, canonical, unit))
     temperatures = []
     for k, src in enumerate(chosen["temperatures"]):
@@ -1017,6 +1043,18 @@ def _numeric_extra(series: pd.Series | np.ndarray) -> np.ndarray | None:
 
     col = pd.to_numeric(series, errors="coerce")
     return col.to_numpy(dtype=float) if col.notna().all() else None
+
+
+def _check_axis(values: np.ndarray, src: str, canonical: str, unit: str, factor: float, locate) -> None:
+    """Refuse an axis reading beyond :class:`AxisLimits` (in the file's unit)."""
+    bound = AxisLimits().bound(canonical)
+    outside = np.abs(values) > bound
+    if outside.any():
+        i = int(np.flatnonzero(outside)[0])
+        raise InputError(
+            f"{locate(i)}: `{src}` = {values[i] / factor:g} {unit} is beyond +-{bound / factor:g} {unit}, "
+            "more than any sensor reads (configs/recordings.toml [axes]); a corrupt cell or the wrong --rate-unit?"
+        )
 
 
 def _check_temperature(temperature: np.ndarray, src: str, locate) -> None:

@@ -166,6 +166,14 @@ def _constant_recording(path: Path, n: int = 600) -> None:
     pd.DataFrame({"time": t, "rate": np.full(n, 0.5), "temperature": 20.0 + t / 60.0}).to_csv(path, index=False)
 
 
+def _huge_rate(path: Path, value: float, n: int = 600) -> None:
+    t = np.arange(n, dtype=float)
+    rate = np.zeros(n)
+    rate[5] = value
+    frame = pd.DataFrame({"time": t, "rate": rate, "temperature": 20.0 + t / 60.0})
+    frame.to_csv(path, index=False) if path.suffix == ".csv" else frame.to_parquet(path)
+
+
 SETTING_FILES = {
     "bias.toml": "[allan]\nbias_factor = -1\n",
     "arw.toml": "[allan]\narw_tau_s = 0\n",
@@ -179,6 +187,10 @@ SETTING_CASES = [
     ("allan-arw-tau-zero", ["allan", "x.parquet", "--config", "arw.toml", "--out", "a.json"], 2, r"arw\.toml \[allan\]: allan arw_tau_s = 0\.0"),
     ("allan-max-arw-nan", ["allan", "x.parquet", "--max-arw", "nan", "--out", "a.json"], 2, r"--max-arw nan: must be a finite number >= 0"),
     ("allan-constant-rate", ["allan", "const.csv", "--out", "a.json"], 2, r"const\.csv `rate`: Allan deviation 0 at tau = 1 s: the series does not vary"),
+    ("allan-rate-1e300", ["allan", "huge.csv", "--out", "a.json"], 2, r"huge\.csv line 7: `rate` = 1e\+300 deg/s is beyond \+-100000 deg/s"),
+    ("allan-rate-minus-1e300-parquet", ["allan", "huge.parquet", "--out", "a.json"], 2, r"huge\.parquet row 6: `rate` = -1e\+300 deg/s is beyond"),
+    ("train-rate-1e300", ["train", "huge.csv", "--config", "polynomial", "--out", "m.json"], 2, r"huge\.csv line 7: `rate` = 1e\+300 deg/s"),
+    ("allan-acceleration-beyond-bound", ["allan", "accel.csv", "--rate-unit", "g", "--out", "a.json"], 2, r"accel\.csv line 7: `rate` = 20000 g is beyond \+-10197\.2 g"),
     ("diagnose-tau-grid-zero", ["diagnose", "x.parquet", "--config", "diag.toml", "--out", "d.json"], 2, r"diag\.toml \[diagnose\]: diagnose\.tau_grid_points = 0"),
     ("simulate-seed-negative", ["simulate", "--seed", "-1", "--out", "s.parquet"], 2, r"run\.seed \(--seed\) = -1 must be an integer >= 0"),
     ("simulate-fs-huge", ["simulate", "--fs", "1e9", "--out", "s.parquet"], 2, r"run\.fs_hz \(--fs\) = 1000000000\.0 must be in \[0\.01, 100000\] Hz"),
@@ -192,6 +204,9 @@ def test_bad_setting_is_refused(tmp_path, monkeypatch, argv, code, message):
     """Every setting has a validated type and range; the error names the setting (issue 21 items 8, 9)."""
     _setup(tmp_path)
     _constant_recording(tmp_path / "const.csv")
+    _huge_rate(tmp_path / "huge.csv", 1e300)
+    _huge_rate(tmp_path / "huge.parquet", -1e300)
+    _huge_rate(tmp_path / "accel.csv", 2e4)
     for name, text in SETTING_FILES.items():
         (tmp_path / name).write_text(text)
     _check_case(tmp_path, monkeypatch, argv, code, message)

@@ -185,6 +185,7 @@ def test_time_limits_equal_the_shipped_config():
 
     table = load_config("recordings")
     assert bind(recordings.TimeLimits, table["time"], "recordings.toml") == recordings.TimeLimits()
+    assert bind(recordings.AxisLimits, table["axes"], "recordings.toml") == recordings.AxisLimits()
 
 
 @pytest.mark.skipif(not LSM6DSM.exists(), reason="shared real data absent")
