@@ -142,19 +142,31 @@ def write_json(path: str | os.PathLike, obj: Any) -> None:
 def read_json(path: str | os.PathLike, schema: str | None = None) -> dict:
     """Read a JSON artefact; with `schema`, check its header (:func:`check_header`)."""
     name, raw = read_bytes(path)
+    obj = parse_json(name, raw)
+    if not isinstance(obj, dict):
+        raise InputError(f"{name}: expected a JSON object at the top level")
+    if schema is not None:
+        check_header(obj, schema, name)
+    return obj
+
+
+def parse_json(name: str, raw: bytes) -> Any:
+    """Strict JSON of `raw` (UTF-8, finite numbers, bounded nesting); errors name `name` and the line.
+
+    Raises
+    ------
+    InputError
+        Not UTF-8, not JSON, NaN/Infinity or an overflowing number, a
+        huge integer, or nesting deeper than the interpreter's recursion.
+    """
     try:
-        obj = json.loads(raw.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite_float)
+        return json.loads(raw.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite_float)
     except (UnicodeDecodeError, ValueError) as err:  # JSONDecodeError is a ValueError
         line = getattr(err, "lineno", None) or _line_of(raw, getattr(err, "token", None))
         at = f" line {line}" if line else ""
         raise InputError(f"{name}{at}: not valid JSON ({err.args[0] if err.args else err})") from None
     except RecursionError:
         raise InputError(f"{name}: not valid JSON (nested too deeply)") from None
-    if not isinstance(obj, dict):
-        raise InputError(f"{name}: expected a JSON object at the top level")
-    if schema is not None:
-        check_header(obj, schema, name)
-    return obj
 
 
 class _BadNumber(ValueError):
@@ -271,10 +283,10 @@ def parquet_header(name: str, meta: dict | None) -> dict:
     meta = meta or {}
     if METADATA_KEY not in meta:
         return {}
-    try:
-        return json.loads(meta[METADATA_KEY])
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise InputError(f"{name}: corrupted gyrocomp metadata") from None
+    header = parse_json(f"{name}: gyrocomp metadata", meta[METADATA_KEY])
+    if not isinstance(header, dict):
+        raise InputError(f"{name}: gyrocomp metadata: expected a JSON object")
+    return header
 
 
 @contextlib.contextmanager

@@ -174,6 +174,16 @@ def _huge_rate(path: Path, value: float, n: int = 600) -> None:
     frame.to_csv(path, index=False) if path.suffix == ".csv" else frame.to_parquet(path)
 
 
+def _with_metadata(path: Path, value: bytes, n: int = 600) -> None:
+    """A valid recording whose ``gyrocomp`` Parquet metadata is `value`."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    t = np.arange(n, dtype=float)
+    table = pa.table({"time": t, "rate": 0.01 * np.sin(t), "temperature": 20.0 + t / 60.0})
+    pq.write_table(table.replace_schema_metadata({b"gyrocomp": value}), path)
+
+
 SETTING_FILES = {
     "bias.toml": "[allan]\nbias_factor = -1\n",
     "arw.toml": "[allan]\narw_tau_s = 0\n",
@@ -191,6 +201,9 @@ SETTING_CASES = [
     ("allan-rate-minus-1e300-parquet", ["allan", "huge.parquet", "--out", "a.json"], 2, r"huge\.parquet row 6: `rate` = -1e\+300 deg/s is beyond"),
     ("train-rate-1e300", ["train", "huge.csv", "--config", "polynomial", "--out", "m.json"], 2, r"huge\.csv line 7: `rate` = 1e\+300 deg/s"),
     ("allan-acceleration-beyond-bound", ["allan", "accel.csv", "--rate-unit", "g", "--out", "a.json"], 2, r"accel\.csv line 7: `rate` = 20000 g is beyond \+-10197\.2 g"),
+    ("allan-metadata-deeply-nested", ["allan", "deep.parquet", "--out", "a.json"], 2, r"deep\.parquet: gyrocomp metadata: not valid JSON \(nested too deeply\)"),
+    ("allan-metadata-not-utf8", ["allan", "latin.parquet", "--out", "a.json"], 2, r"latin\.parquet: gyrocomp metadata: not valid JSON"),
+    ("train-metadata-not-an-object", ["train", "list.parquet", "--config", "polynomial", "--out", "m.json"], 2, r"list\.parquet: gyrocomp metadata: expected a JSON object"),
     ("diagnose-tau-grid-zero", ["diagnose", "x.parquet", "--config", "diag.toml", "--out", "d.json"], 2, r"diag\.toml \[diagnose\]: diagnose\.tau_grid_points = 0"),
     ("simulate-seed-negative", ["simulate", "--seed", "-1", "--out", "s.parquet"], 2, r"run\.seed \(--seed\) = -1 must be an integer >= 0"),
     ("simulate-fs-huge", ["simulate", "--fs", "1e9", "--out", "s.parquet"], 2, r"run\.fs_hz \(--fs\) = 1000000000\.0 must be in \[0\.01, 100000\] Hz"),
@@ -207,6 +220,9 @@ def test_bad_setting_is_refused(tmp_path, monkeypatch, argv, code, message):
     _huge_rate(tmp_path / "huge.csv", 1e300)
     _huge_rate(tmp_path / "huge.parquet", -1e300)
     _huge_rate(tmp_path / "accel.csv", 2e4)
+    _with_metadata(tmp_path / "deep.parquet", b"[" * 100_000 + b"]" * 100_000)
+    _with_metadata(tmp_path / "latin.parquet", '{"name": "caf\u00e9"}'.encode("latin-1"))
+    _with_metadata(tmp_path / "list.parquet", b"[1, 2]")
     for name, text in SETTING_FILES.items():
         (tmp_path / name).write_text(text)
     _check_case(tmp_path, monkeypatch, argv, code, message)
@@ -224,3 +240,24 @@ def test_allan_taus_list_form_is_read(tmp_path):
 
     assert json.loads((tmp_path / "a.json").read_text())["series"][0]["tau_s"] == [1.0, 10.0]
     assert get_config(tmp_path / "taus.toml").taus == "1.0,10.0"
+
+
+def test_an_error_that_names_no_file_is_given_the_inputs(tmp_path):
+    """A library error about content (``savgol: 20 samples ...``) leaves a stage naming its input (issue 21 item 15)."""
+    from gyrocomp.commands import allan as stage
+    from gyrocomp.errors import InputError
+
+    def failing(message):
+        @commands.guarded(stage.written)
+        def to_files(inputs, out, options=stage.Options()):
+            raise InputError(message)
+
+        return to_files
+
+    x = _recording(tmp_path / "x.parquet")
+    with pytest.raises(InputError, match=r"^.*x\.parquet: savgol: 20 samples are fewer than the window$"):
+        failing("savgol: 20 samples are fewer than the window")([x], tmp_path / "a.json")
+    with pytest.raises(InputError, match=r"^allan: unknown table$"):  # names the config already
+        failing("allan: unknown table")([x], tmp_path / "a.json")
+    with pytest.raises(InputError, match=r"^" + re.escape(f"{x} line 3: bad")):
+        failing(f"{x} line 3: bad")([x], tmp_path / "a.json")

@@ -28,6 +28,7 @@ clash exits 2 naming both paths; an output named twice does too.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import importlib
@@ -35,7 +36,7 @@ import inspect
 import os
 from pathlib import PurePath
 from types import ModuleType
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Iterator, Mapping, Sequence
 
 __all__ = [
     "STAGES",
@@ -72,7 +73,11 @@ class Folder(str):
 
 
 def guarded(written: Callable[[Any, Any], Sequence[Any]]):
-    """Wrap a stage's ``to_files`` so that :func:`check_paths` runs first.
+    """Wrap a stage's ``to_files`` so that :func:`check_paths` runs first and every error names a file.
+
+    A library error about a file's content that names no file (``savgol:
+    20 samples ...``, ``classes: ...``) is prefixed with the inputs
+    (:func:`name_inputs`).
 
     Parameters
     ----------
@@ -87,12 +92,34 @@ def guarded(written: Callable[[Any, Any], Sequence[Any]]):
         @functools.wraps(to_files)
         def run(inputs, out, options=default, **kwargs):
             check_paths(inputs, options, written(out, options))
-            return to_files(inputs, out, options, **kwargs)
+            with name_inputs(inputs, options):
+                return to_files(inputs, out, options, **kwargs)
 
         run.written = written
         return run
 
     return decorate
+
+
+@contextlib.contextmanager
+def name_inputs(inputs: Sequence[Any], options: Any) -> Iterator[None]:
+    """Prefix an :class:`~gyrocomp.errors.InputError` that names none of the files with the inputs' names.
+
+    A message already naming an input or a file-valued option (the config,
+    the holdout, the model) is left as it is.
+    """
+    from gyrocomp.errors import InputError
+
+    names = [os.fspath(p) for p in inputs if str(p) not in ("", "-")]
+    try:
+        yield
+    except InputError as err:
+        message = str(err)
+        files = [v for f in dataclasses.fields(options) for v in _paths_in(getattr(options, f.name)) if f.name == "config" or os.path.exists(v)]
+        known = names + files
+        if not names or any(k in message for k in known):
+            raise
+        raise type(err)(f"{', '.join(names)}: {message}") from err
 
 
 def check_paths(inputs: Sequence[Any], options: Any, outputs: Sequence[Any]) -> None:
