@@ -54,6 +54,7 @@ __all__ = [
     "Recording",
     "TimeLimits",
     "AxisLimits",
+    "PLAUSIBLE_DEGC",
     "read_recording",
     "recording_from_frame",
     "RATE_UNITS",
@@ -81,7 +82,7 @@ _SEPARATOR_WORDS = {"\\t": "\t", "tab": "\t", "\\s+": "\\s+"}
 COMPRESSIONS = (".gz", ".bz2", ".xz", ".zst", ".zip")
 """Extensions of compressed CSV, decompressed by pandas."""
 
-_PLAUSIBLE_DEGC = (-100.0, 200.0)
+PLAUSIBLE_DEGC = (-100.0, 200.0)
 """Temperatures outside this range are refused as a probable unit mistake."""
 
 
@@ -1058,7 +1059,7 @@ def _check_axis(values: np.ndarray, src: str, canonical: str, unit: str, factor:
 
 
 def _check_temperature(temperature: np.ndarray, src: str, locate) -> None:
-    lo, hi = _PLAUSIBLE_DEGC
+    lo, hi = PLAUSIBLE_DEGC
     outside = (temperature < lo) | (temperature > hi)
     if outside.any():
         i = int(np.flatnonzero(outside)[0])

@@ -204,6 +204,7 @@ SETTING_CASES = [
     ("allan-metadata-deeply-nested", ["allan", "deep.parquet", "--out", "a.json"], 2, r"deep\.parquet: gyrocomp metadata: not valid JSON \(nested too deeply\)"),
     ("allan-metadata-not-utf8", ["allan", "latin.parquet", "--out", "a.json"], 2, r"latin\.parquet: gyrocomp metadata: not valid JSON"),
     ("train-metadata-not-an-object", ["train", "list.parquet", "--config", "polynomial", "--out", "m.json"], 2, r"list\.parquet: gyrocomp metadata: expected a JSON object"),
+    ("simulate-level-the-reader-refuses", ["simulate", "--profile", "soak-25", "--set", "profile.levels_c=[1000.0]", "--out", "s.parquet"], 2, r"profile\.levels_c = \(1000\.0,\) leaves \[-100, 200\] degC"),
     ("diagnose-tau-grid-zero", ["diagnose", "x.parquet", "--config", "diag.toml", "--out", "d.json"], 2, r"diag\.toml \[diagnose\]: diagnose\.tau_grid_points = 0"),
     ("simulate-seed-negative", ["simulate", "--seed", "-1", "--out", "s.parquet"], 2, r"run\.seed \(--seed\) = -1 must be an integer >= 0"),
     ("simulate-fs-huge", ["simulate", "--fs", "1e9", "--out", "s.parquet"], 2, r"run\.fs_hz \(--fs\) = 1000000000\.0 must be in \[0\.01, 100000\] Hz"),

@@ -41,7 +41,7 @@ from gyrocomp import recordings
 from gyrocomp.config import bind
 from gyrocomp.errors import InputError
 from gyrocomp.models._base import check_choice, check_float, finite_array
-from gyrocomp.pipeline.rate import CausalRate
+from gyrocomp.pipeline.rate import CausalRate, check_described
 from gyrocomp.pipeline.settings import PIPELINE_KINDS, RateSettings
 from gyrocomp.streaming import CHUNK_ROWS
 from gyrocomp.pipeline.train import INPUTS, axis_models, segment_inputs, segments
@@ -208,6 +208,7 @@ def _drift_model(obj: dict, name: str) -> DriftModel:
     try:
         rate_table = {k: obj["rate_estimator"][k] for k in ("method", "window_s", "polyorder")}
         rate = bind(RateSettings, rate_table, f"{name} rate_estimator")
+        check_described(obj["rate_estimator"], rate, name)
         learners = {}
         for segment, entry in obj["segments"].items():
             where = f"{name}: segment {segment}"

@@ -289,6 +289,46 @@ def describe(settings: RateSettings, fs_hz: float) -> dict:
     }
 
 
+def check_described(stored: dict, settings: RateSettings, name: str, rtol: float = 1e-9) -> None:
+    """Refuse a stored estimator (``model.json`` ``rate_estimator``) whose constants its settings do not give.
+
+    The FIR and recursion constants handed to firmware (:func:`describe`)
+    must be what compensation runs: each is recomputed from the settings at
+    the stored ``fs_hz`` and compared within `rtol` (relative to the
+    largest magnitude of the field).
+
+    Raises
+    ------
+    InputError
+        Naming `name` and the first field that differs.
+    """
+    from gyrocomp.models._base import check_float
+
+    fs_hz = check_float(f"{name}: rate_estimator", "fs_hz", stored.get("fs_hz"), 0.0, low_open=True)
+    expected = describe(settings, fs_hz)
+    fields = {
+        "window_samples": (stored.get("window_samples"), expected["window_samples"]),
+        "causal_coefficients": (stored.get("causal_coefficients"), expected["causal_coefficients"]),
+        **{
+            f"recursion.{key}": ((stored.get("recursion") or {}).get(key), value)
+            for key, value in expected["recursion"].items()
+        },
+    }
+    for field, (have, want) in fields.items():
+        try:
+            have_a, want_a = np.asarray(have, dtype=float), np.asarray(want, dtype=float)
+            same = have_a.shape == want_a.shape and bool(
+                np.all(np.abs(have_a - want_a) <= rtol * max(float(np.max(np.abs(want_a), initial=0.0)), 1e-300))
+            )
+        except (TypeError, ValueError):
+            same = False
+        if not same:
+            raise InputError(
+                f"{name}: rate_estimator.{field} is not what window_s = {settings.window_s:g} s, "
+                f"polyorder = {settings.polyorder} give at {fs_hz:g} Hz (the model was edited?)"
+            )
+
+
 def _check_temperature(temperature_c, minimum: int) -> np.ndarray:
     temperature = np.asarray(temperature_c, dtype=float)
     if temperature.ndim != 1 or temperature.size < minimum:

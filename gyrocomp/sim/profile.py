@@ -62,6 +62,15 @@ class ProfileSettings:
         for name in ("start_hold_s", "chamber_tau_s", "sensor_noise_c", "sensor_resolution_c"):
             if not getattr(self, name) >= 0:
                 raise InputError(f"profile.{name} = {getattr(self, name)!r} must be >= 0")
+        from gyrocomp.recordings import PLAUSIBLE_DEGC
+
+        lo, hi = PLAUSIBLE_DEGC
+        for name, values in (("start_c", (self.start_c,)), ("levels_c", self.levels_c)):
+            if any(not lo <= v <= hi for v in values):
+                raise InputError(
+                    f"profile.{name} = {getattr(self, name)!r} leaves [{lo:g}, {hi:g}] degC, "
+                    "the temperatures the recording reader accepts: the simulated recording could not be read back"
+                )
 
     def breakpoints(self) -> tuple[np.ndarray, np.ndarray]:
         """Corners ``(time_s, setpoint_c)`` of the piecewise-linear set-point."""
