@@ -121,6 +121,7 @@ def streams(inputs: Sequence[str | os.PathLike], options: Options = Options()) -
     return options.mode == "causal" and not options.resample and options.plot is None and streaming.supports(inputs[0], options.columns)
 
 
+@guarded(written)
 def stream_to_files(
     inputs: Sequence[str | os.PathLike],
     out: str | os.PathLike,
