@@ -281,10 +281,11 @@ def report_figure(report: dict):
     """``run``'s report: Allan deviation, 100 s means over time and signal survival, one panel each."""
     from gyrocomp.pipeline.report import method_label
 
+    several = len(report.get("axes", ())) > 1
     fig = _figure(17.0, 5.2)
     axes = fig.subplots(1, 3)
     for row in report["rows"]:
-        label = method_label(row)
+        label = method_label(row, several)
         style = {"color": "k", "lw": 2} if row["method"] == "raw" else {"lw": 1.2, "ls": "--" if row["mode"] == "causal" else "-"}
         axes[0].loglog(row["allan"]["tau_s"], np.asarray(row["allan"]["adev"]) * 3600, label=label, **style)
         means = np.asarray(row["means_dph"])
@@ -302,7 +303,7 @@ def report_figure(report: dict):
     for i, part in enumerate(parts):
         axes[2].bar(x + i * width, [100 * r["signal"]["parts"][part] for r in kept], width, label=part)
     axes[2].axhline(100, color="k", lw=0.8)
-    axes[2].set_xticks(x + width * (len(parts) - 1) / 2, [method_label(r) for r in kept], rotation=35, ha="right", fontsize=7)
+    axes[2].set_xticks(x + width * (len(parts) - 1) / 2, [method_label(r, several) for r in kept], rotation=35, ha="right", fontsize=7)
     axes[2].set(ylabel="signal kept [%]", title="Injected angular rate that survives")
     axes[2].legend(fontsize=7)
     return fig

@@ -313,8 +313,10 @@ def _run_execute(source: Path, folder: Path, options, files: dict) -> tuple[dict
     options = dataclasses.replace(options, test=_paired(options.test, source, "--test"), workers=1)
     report = stage.to_files([files["config"], source], folder, options)
     figures = {"held_out": bool(report["test"]["held_out"])}
+    several = len(report["axes"]) > 1
     for row in report["rows"]:
         label = row["method"] if row["mode"] is None else f"{row['method']}_{row['mode']}"
+        label = f"{row['axis']}_{label}" if several else label
         figures[f"{label}_arw"] = row["arw"]["value"]
         figures[f"{label}_bias_instability"] = row["bias_instability"]["value"]
         figures[f"{label}_drift_std_deg_h"] = row["residual_drift"]["std_deg_h"]

@@ -53,6 +53,9 @@ def decompose(
     Writes components.parquet (time, rate, temperature when present, one
     column per component) and components.json (per component: energy share,
     mean frequency, orthogonality index; and the reconstruction error).
+    Several axes (--rate-col gx,gy,gz) go into one file: each axis under its
+    own name and its components prefixed by it (gx_isc1 ... gx_trend), every
+    axis decomposed alone with the same seed.
     """
     with report_errors(ctx):
         from gyrocomp.commands import decompose as stage, from_params
@@ -63,13 +66,15 @@ def decompose(
     _print_table(console_for(ctx), sidecar)
 
 
-def _print_table(console, stats):
+def _print_table(console, sidecar):
     from rich.table import Table
 
-    name = stats["inputs"][0]["name"]
-    table = Table(title=f"{stats['method']} of {name}: reconstruction error {stats['reconstruction_error']:.2e}")
-    for head in ("component", "energy share", "mean freq [Hz]", "orthogonality"):
-        table.add_column(head, justify="left" if head == "component" else "right")
-    for c in stats["components"]:
-        table.add_row(c["name"], f"{c['energy_share']:.4f}", f"{c['mean_frequency_hz']:.4g}", f"{c['orthogonality_index']:+.2e}")
-    console.print(table)
+    name = sidecar["inputs"][0]["name"]
+    for label, stats in sidecar.get("axes", {"": sidecar}).items():
+        where = f"{name} [{label}]" if label else name
+        table = Table(title=f"{sidecar['method']} of {where}: reconstruction error {stats['reconstruction_error']:.2e}")
+        for head in ("component", "energy share", "mean freq [Hz]", "orthogonality"):
+            table.add_column(head, justify="left" if head == "component" else "right")
+        for c in stats["components"]:
+            table.add_row(c["name"], f"{c['energy_share']:.4f}", f"{c['mean_frequency_hz']:.4g}", f"{c['orthogonality_index']:+.2e}")
+        console.print(table)

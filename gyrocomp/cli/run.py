@@ -50,6 +50,8 @@ def run(
     residual temperature drift (std and peak-to-peak of 100 s means, deg/h),
     signal preservation (a known angular rate added to the test run before
     processing: share kept, RMS error), training and per-stage times.
+    Several axes (--rate-col gx,gy,gz): every method on each axis alone, the
+    report rows naming their axis, artefacts under OUT/<axis>/<method>/.
     """
     with report_errors(ctx):
         from gyrocomp.commands import from_params, run as stage
@@ -65,12 +67,13 @@ def _print(console, report: dict, out: Path) -> None:
     from rich.table import Table
 
     table = Table(title=f"{out}/report.md (test run {report['test']['name']})")
+    several = len(report.get("axes", ())) > 1
     for column in ("method", "mode", "ARW deg/sqrt(h)", "bias inst. deg/h", "drift std deg/h", "drift p-p deg/h", "signal kept", "train s"):
         table.add_column(column)
     for row in report["rows"]:
         kept = row.get("signal")
         table.add_row(
-            row["method"],
+            f"{row['method']} [{row['axis']}]" if several else row["method"],
             row["mode"] or "-",
             f"{row['arw']['value']:.3g}",
             f"{row['bias_instability']['value']:.3g}",

@@ -76,14 +76,18 @@ def write(components: str | os.PathLike, settings, out: str | os.PathLike, *, pl
         ``classes.json`` to write (``-``: stdout): the header (input: the
         components file's name and SHA-256), ``entropy`` (kind and its
         settings), ``thresholds`` and ``components``
-        (:func:`gyrocomp.classify.classify`).
+        (:func:`gyrocomp.classify.classify`); a several-axis components file
+        (header ``axes``, :func:`gyrocomp.commands.decompose.write_axes`)
+        gives ``axes`` in place of ``components``: per axis its
+        ``components``, named by their columns (``gx_isc1``), each axis
+        classified alone as its one-axis file would be.
     plot : path-like or None
         PNG of :func:`gyrocomp.plots.classes_figure` (entropies and the components labelled by class) to write as well.
 
     Returns
     -------
     list of dict
-        The entries of :func:`gyrocomp.classify.classify`.
+        The entries of :func:`gyrocomp.classify.classify`, axis after axis.
 
     Raises
     ------
@@ -103,11 +107,21 @@ def write(components: str | os.PathLike, settings, out: str | os.PathLike, *, pl
     missing = [n for n in names if n not in frame.columns]
     if missing:
         raise InputError(f"{components}: component column {missing[0]!r} listed in the header is missing")
-    entries = classify(frame[names].to_numpy(dtype=float).T, names, settings)
     result = artefacts.artefact_header(CLASSES_SCHEMA, inputs=[artefacts.file_record(components)], settings=settings_dict(settings))
     result["entropy"] = {"kind": settings.entropy, **dataclasses.asdict(settings.active)}
     result["thresholds"] = {"noise_above": settings.noise_above, "drift_below": settings.drift_below}
-    result["components"] = entries
+    if "axes" in header:
+        from gyrocomp.commands.decompose import axis_view
+
+        result["axes"] = {}
+        for axis in header["axes"]:
+            one, one_header = axis_view(frame, header, axis, str(components))
+            entries = classify(one[one_header["components"]].to_numpy(dtype=float).T, one_header["components"], settings)
+            result["axes"][axis] = {"components": [{**e, "name": f"{axis}_{e['name']}"} for e in entries]}
+        entries = [e for axis in result["axes"].values() for e in axis["components"]]
+    else:
+        entries = classify(frame[names].to_numpy(dtype=float).T, names, settings)
+        result["components"] = entries
     artefacts.write_json(out, result)
     if plot is not None:
         stack = [(e["name"], frame[e["name"]].to_numpy(dtype=float), e["class"]) for e in entries]

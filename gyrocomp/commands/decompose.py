@@ -10,7 +10,7 @@ from typing import Callable, Optional, Sequence
 from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
-__all__ = ["Options", "to_files", "write", "table"]
+__all__ = ["Options", "to_files", "write", "write_axes", "table", "axis_view"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,23 +71,32 @@ def written(out, options) -> list:
 
 @guarded(written)
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options(), *, progress: Callable[[int, int], None] | None = None):
-    """Read a recording (``inputs = [recording]``), decompose its one axis and write the artefacts (:func:`write`).
+    """Read a recording (``inputs = [recording]``), decompose every axis and write the artefacts.
+
+    One axis: :func:`write` (columns ``rate`` and the component names).
+    Several axes (``--rate-col gx,gy,gz``): :func:`write_axes` (columns
+    prefixed by the axis, ``gx_isc1 ... gx_trend``).
 
     Returns
     -------
-    decomposition : gyrocomp.decompose.Decomposition
+    decomposition : gyrocomp.decompose.Decomposition, or dict of str to it (several axes)
     sidecar : dict
         The ``components.json`` object written.
     """
     from gyrocomp import recordings
 
     (path,) = inputs
-    recording = recordings.read_recording(path, options.columns, min_samples=4, resample=options.resample).axis()
-    result, sidecar = write(recording, options.settings(), out, seed=options.seed, workers=options.workers, progress=progress)
+    recording = recordings.read_recording(path, options.columns, min_samples=4, resample=options.resample)
+    if len(recording.axes) == 1:
+        recording = recording.axis()
+        result, sidecar = write(recording, options.settings(), out, seed=options.seed, workers=options.workers, progress=progress)
+        stack = [(name, values, None) for name, values in zip(result.names, result.components)]
+    else:
+        result, sidecar = write_axes(recording, options.settings(), out, seed=options.seed, workers=options.workers, progress=progress)
+        stack = [(f"{axis}_{name}", values, None) for axis, one in result.items() for name, values in zip(one.names, one.components)]
     if options.plot is not None:
         from gyrocomp import plots
 
-        stack = [(name, values, None) for name, values in zip(result.names, result.components)]
         plots.save(plots.components_figure(recording.time_s, stack), options.plot)
     return result, sidecar
 
@@ -147,3 +156,100 @@ def table(recording, result, settings, seed: int):
     header = artefacts.artefact_header("gyrocomp.components", inputs=[recording.input_record()], settings=settings_dict(settings), seed=seed)
     header.update(components=list(result.names), fs_hz=recording.fs_hz, axis=recording.axes[0].name, unit=recording.axes[0].unit)
     return frame, header
+
+
+def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers: int = 1, progress: Callable[[int, int], None] | None = None):
+    """Decompose every axis of a recording and write them into one ``components.parquet`` and its sidecar.
+
+    Each axis is decomposed alone, with the same `seed` (the seed of axis
+    ``k`` does not depend on `k` nor on `workers`, which only spreads each
+    ensemble), so an axis' components equal those of ``decompose
+    --rate-col <axis>`` and of ``train``'s per-axis decomposition
+    (:func:`gyrocomp.commands.train.train_axes`).
+
+    Parameters
+    ----------
+    recording : gyrocomp.recordings.Recording
+        Several axes.
+    settings : gyrocomp.decompose.DecomposeSettings
+    out : path-like
+        ``components.parquet`` to write: ``time``, ``temperature`` (when the
+        recording has it), each axis' values under its column name, and each
+        component as ``<axis>_<component>`` (``gx_isc1 ... gx_trend``),
+        axis after axis, fastest first. Header schema
+        ``gyrocomp.components`` with ``components`` (every component
+        column), ``fs_hz`` and ``axes``: per axis its ``unit`` and
+        ``components`` (its columns). The sidecar lists per axis (``axes``)
+        the :func:`~gyrocomp.decompose.component_stats` of its components.
+    seed, workers, progress
+        As :func:`gyrocomp.decompose.decompose`.
+
+    Returns
+    -------
+    decompositions : dict of str to gyrocomp.decompose.Decomposition
+        By axis name, in the recording's order.
+    sidecar : dict
+    """
+    import pandas as pd
+
+    from gyrocomp import artefacts
+    from gyrocomp.config import settings_dict
+    from gyrocomp.decompose import SIDECAR_SCHEMA, component_stats, decompose
+
+    columns = {"time": recording.time_s}
+    if recording.temperature_c is not None:
+        columns["temperature"] = recording.temperature_c
+    results, axes, stats = {}, {}, {}
+    for axis in recording.axes:
+        one = recording.axis(axis.name)
+        result = decompose(one.rate_dps, settings, seed=seed, workers=workers, callback=progress)
+        names = [f"{axis.name}_{name}" for name in result.names]
+        columns[axis.name] = one.rate_dps
+        columns.update(zip(names, result.components))
+        results[axis.name] = result
+        axes[axis.name] = {"unit": axis.unit, "components": names}
+        stats[axis.name] = component_stats(result, recording.fs_hz)
+        for entry, name in zip(stats[axis.name]["components"], names):
+            entry["name"] = name
+    frame = pd.DataFrame(columns)
+    header = artefacts.artefact_header("gyrocomp.components", inputs=[recording.input_record()], settings=settings_dict(settings), seed=seed)
+    header.update(components=[n for a in axes.values() for n in a["components"]], fs_hz=recording.fs_hz, axes=axes)
+    sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=header["inputs"], settings=header["settings"], seed=seed)
+    sidecar.update(method=settings.method, fs_hz=recording.fs_hz, axes=stats)
+    artefacts.write_table(out, frame, header)
+    artefacts.write_json(Path(out).with_suffix(".json"), sidecar)
+    return results, sidecar
+
+
+def axis_view(frame, header: dict, axis: str, source: str = "components.parquet"):
+    """One axis of a several-axis ``components.parquet`` as a one-axis table and header (as :func:`write` lays it out).
+
+    Columns ``time``, ``rate``, ``temperature`` (when present) and the
+    axis' components without their ``<axis>_`` prefix; the header's
+    ``components``, ``axis`` and ``unit`` are the axis'. `source` names
+    the file in error messages.
+
+    Raises
+    ------
+    InputError
+        The header has no such axis, or a listed column is missing.
+    """
+    import pandas as pd
+
+    from gyrocomp.errors import InputError
+
+    entry = (header.get("axes") or {}).get(axis)
+    if not isinstance(entry, dict) or not isinstance(entry.get("components"), list):
+        raise InputError(f"{source}: header has no axis {axis!r} with a `components` list")
+    listed = [axis, *entry["components"]]
+    missing = [c for c in listed if c not in frame.columns]
+    if missing:
+        raise InputError(f"{source}: column {missing[0]!r} of axis {axis!r} listed in the header is missing")
+    names = [c[len(axis) + 1 :] for c in entry["components"]]
+    table = {"time": frame["time"].to_numpy(), "rate": frame[axis].to_numpy()}
+    if "temperature" in frame.columns:
+        table["temperature"] = frame["temperature"].to_numpy()
+    table.update({name: frame[column].to_numpy() for name, column in zip(names, entry["components"])})
+    one = {k: v for k, v in header.items() if k != "axes"}
+    one.update(components=names, axis=axis, unit=str(entry.get("unit", "deg/s")))
+    return pd.DataFrame(table), one

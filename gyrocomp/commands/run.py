@@ -10,6 +10,11 @@ For each method of the run config (``configs/compare.toml``):
 3. score: ARW and bias instability, residual temperature drift of the
    100 s means, signal preservation, training and per-stage times.
 
+Several axes (``--rate-col gx,gy,gz``) run every method on each axis
+alone, with the same seed and the same injected rate, as ``run`` on that
+column would; their artefacts go under ``DIR/<axis>/<method>/`` and every
+report row and method entry names its ``axis``.
+
 Every artefact is kept under ``DIR/<method>/``; the scores go to
 ``report.json``, ``report.md`` and ``report.png``
 (:mod:`gyrocomp.pipeline.report`). Without a test run the training run is
@@ -29,6 +34,7 @@ import numpy as np
 
 from gyrocomp import artefacts, recordings
 from gyrocomp.commands import Folder, guarded
+from gyrocomp.errors import InputError
 from gyrocomp.config import PIPELINE_TABLES, apply_overrides, bind, check_tables, load_config, settings_dict
 from gyrocomp.pipeline import evaluate
 from gyrocomp.pipeline.compensate import compensate, load_model
@@ -95,7 +101,8 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
     inputs : sequence of path-like
         ``[run config, training recording]``: the run config
         (``configs/compare.toml``, or a name in ``configs/``) and a
-        recording with temperature; ``options.test`` is held out from training.
+        recording with temperature (one axis or several, ``options.columns``);
+        ``options.test`` is held out from training and must have the same axes.
     out_dir : path-like
         Folder for every artefact and the report.
     options : Options
@@ -106,7 +113,6 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
     dict
         The report (also written as ``report.json``).
     """
-    from gyrocomp.commands.compensate import write as write_compensation
     from gyrocomp.pipeline import report
 
     started = time.perf_counter()
@@ -115,18 +121,65 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
     seed, workers, columns = options.seed, options.workers, options.columns
     run_settings, eval_settings, signal_settings, _ = load_run_config(config_path, options.overrides)
     out = Path(out_dir)
-    train_rec = recordings.read_recording(train_path, columns, require_temperature=True, min_samples=16).axis()
+    train_all = recordings.read_recording(train_path, columns, require_temperature=True, min_samples=16)
     held_out = options.test is not None
-    test_rec = recordings.read_recording(options.test, columns, require_temperature=True, min_samples=16).axis() if held_out else train_rec
-    signal, parts = evaluate.injected_signal(test_rec.time_s, test_rec.fs_hz, signal_settings)
-    signal_rec = _with_signal(test_rec, signal)
+    test_all = recordings.read_recording(options.test, columns, require_temperature=True, min_samples=16) if held_out else train_all
+    names = train_all.axis_names
+    if held_out and test_all.axis_names != names:
+        raise InputError(f"{options.test}: axes {', '.join(test_all.axis_names)} differ from the training run's ({', '.join(names)})")
+    several = len(names) > 1
+    first = test_all.axis(names[0])
+    signal, parts = evaluate.injected_signal(first.time_s, first.fs_hz, signal_settings)
+
+    rows, methods = [], []
+    for axis in names:
+        train_rec, test_rec = train_all.axis(axis), test_all.axis(axis)
+        where = out / axis if several else out
+        tag = f"{axis}: " if several else ""
+        axis_rows, axis_methods = _run_axis(
+            run_settings, eval_settings, train_rec, test_rec, _with_signal(test_rec, signal), parts, out, where,
+            seed=seed, workers=workers, step=lambda stage, done, total, tag=tag: step(tag + stage, done, total),
+        )
+        rows += [{"axis": axis, **row} for row in axis_rows]
+        methods += [{"axis": axis, **info} for info in axis_methods]
+    train_rec, test_rec = train_all.axis(names[0]), first
+    result = {
+        **artefacts.artefact_header(
+            REPORT_SCHEMA,
+            inputs=[train_all.input_record()] + ([test_all.input_record()] if held_out else []),
+            settings={
+                "run": settings_dict(run_settings),
+                "evaluate": settings_dict(eval_settings),
+                "signal": settings_dict(signal_settings),
+                "config": str(config_path),
+                "workers": workers,
+            },
+            seed=seed,
+        ),
+        "train": _describe(train_rec),
+        "test": {**_describe(test_rec), "held_out": held_out},
+        "axes": list(names),
+        "signal": {"rms_dps": float(np.sqrt(np.mean((signal - signal.mean()) ** 2))), "parts": list(parts)},
+        "methods": methods,
+        "rows": rows,
+    }
+    result["findings"] = report.findings(result)
+    result["total_time_s"] = time.perf_counter() - started
+    step("report", 0, 1)
+    report.write(out, result)
+    return result
+
+
+def _run_axis(run_settings, eval_settings, train_rec, test_rec, signal_rec, parts, out: Path, where: Path, *, seed, workers, step) -> tuple[list, list]:
+    """Every method of the run config on one axis: its report rows (raw first) and method entries; artefacts under ``where/<method>/``."""
+    from gyrocomp.commands.compensate import write as write_compensation
 
     rows = [_score("raw", None, test_rec.rate_dps, None, test_rec.fs_hz, eval_settings)]
     methods = []
     for method in run_settings.methods:
         config, source, name = _method_config(method, run_settings.overrides)
-        folder = out / name
-        info, models = _train_method(config, source, name, train_rec, folder, seed, workers, step)
+        folder = where / name
+        info, models = _train_method(config, source, name, train_rec, folder, seed, workers, step, out)
         info["overrides"] = [o.partition(":")[2] for o in run_settings.overrides if o.partition(":")[0] == method]
         modes = run_settings.modes if info["parallel"] else ("causal",)
         for mode in modes:
@@ -151,30 +204,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
             kept = evaluate.signal_preservation(outputs["test_signal"], outputs["test"], parts)
             rows.append(_score(name, mode, outputs["test"], kept, test_rec.fs_hz, eval_settings, info))
         methods.append(info)
-    result = {
-        **artefacts.artefact_header(
-            REPORT_SCHEMA,
-            inputs=[train_rec.input_record()] + ([test_rec.input_record()] if held_out else []),
-            settings={
-                "run": settings_dict(run_settings),
-                "evaluate": settings_dict(eval_settings),
-                "signal": settings_dict(signal_settings),
-                "config": str(config_path),
-                "workers": workers,
-            },
-            seed=seed,
-        ),
-        "train": _describe(train_rec),
-        "test": {**_describe(test_rec), "held_out": held_out},
-        "signal": {"rms_dps": float(np.sqrt(np.mean((signal - signal.mean()) ** 2))), "parts": list(parts)},
-        "methods": methods,
-        "rows": rows,
-    }
-    result["findings"] = report.findings(result)
-    result["total_time_s"] = time.perf_counter() - started
-    step("report", 0, 1)
-    report.write(out, result)
-    return result
+    return rows, methods
 
 
 def decompose_and_classify(recording: recordings.Recording, config: dict, source: str, folder: Path, *, seed: int, workers: int, callback=None) -> tuple[dict, dict]:
@@ -206,7 +236,7 @@ def decompose_and_classify(recording: recordings.Recording, config: dict, source
     return times, paths
 
 
-def _train_method(config, source, name, train_rec, folder: Path, seed, workers, step):
+def _train_method(config, source, name, train_rec, folder: Path, seed, workers, step, out: Path):
     pipeline = pipeline_settings(config, source)
     info = {
         "name": name,
@@ -233,7 +263,7 @@ def _train_method(config, source, name, train_rec, folder: Path, seed, workers, 
             inputs=[file_record(paths["components"]), file_record(paths["classes"])],
         )
         info["stage_times_s"]["train"] = time.perf_counter() - t0
-        info["artefacts"].update({k: str(Path(name) / p.name) for k, p in paths.items()})
+        info["artefacts"].update({k: str(p.relative_to(out)) for k, p in paths.items()})
     else:
         step(f"{name}: train", 0, 1)
         t0 = time.perf_counter()
@@ -241,7 +271,7 @@ def _train_method(config, source, name, train_rec, folder: Path, seed, workers, 
         info["stage_times_s"]["train"] = time.perf_counter() - t0
     info["train_time_s"] = time.perf_counter() - t_train
     artefacts.write_json(model_path, model_file({"rate": model}))
-    info["artefacts"]["model"] = str(Path(name) / "model.json")
+    info["artefacts"]["model"] = str(model_path.relative_to(out))
     return info, load_model(artefacts.read_json(model_path), str(model_path))
 
 

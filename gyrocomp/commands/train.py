@@ -59,13 +59,15 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     spans a gap); a parallel pipeline decomposes and classifies each axis
     first, as ``decompose`` and ``classify`` would (one continuous run: a
     gap is refused). Given components and classes, a parallel pipeline fits
-    the one axis they were decomposed from.
+    every axis they were decomposed from (a several-axis components file and
+    its classes: each axis as its one-axis chain would).
 
     Parameters
     ----------
     inputs : sequence of path-like
         ``[recording]`` (with temperature), or ``[components.parquet,
-        classes.json]`` for a parallel pipeline.
+        classes.json]`` for a parallel pipeline (one axis, or several:
+        :func:`gyrocomp.commands.decompose.write_axes`).
     out : path-like
         ``model.json`` to write (:func:`gyrocomp.pipeline.train.model_file`:
         a model per axis under ``axes``, named after the axes' columns).
@@ -91,9 +93,12 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         frame, header = artefacts.read_table(source, "gyrocomp.components")
         labels = artefacts.read_json(classes, "gyrocomp.classes")
         records = [file_record(source), file_record(classes)]
-        axis = str(header.get("axis", "rate"))
-        trained = {axis: train_parallel(frame, header, labels, cfg, source=options.config, seed=options.seed, inputs=records)}
-        units = {axis: str(header.get("unit", "deg/s"))}
+        if "axes" in header:
+            trained, units = _train_components_axes(frame, header, labels, cfg, source, classes, options, records)
+        else:
+            axis = str(header.get("axis", "rate"))
+            trained = {axis: train_parallel(frame, header, labels, cfg, source=options.config, seed=options.seed, inputs=records)}
+            units = {axis: str(header.get("unit", "deg/s"))}
     else:
         if rest:
             raise InputError(f"{options.config}: a direct pipeline ({pipeline.kind}) trains on the recording alone; drop {rest[0]}")
@@ -106,12 +111,43 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         from gyrocomp.pipeline.compensate import load_models
 
         if pipeline.parallel:
-            recording = recordings.recording_from_frame(frame[["time", "rate", "temperature"]], name=Path(source).name)
+            rates = list(units) if "axes" in header else ["rate"]
+            recording = recordings.recording_from_frame(
+                frame[["time", *rates, "temperature"]], name=Path(source).name, columns=ColumnSpec(rate=",".join(rates), rate_unit=",".join(units.values()))
+            )
         models = load_models(model, str(out))
         only = next(iter(models.values())) if len(models) == 1 else None  # one model: whatever its axis is called
         pairs = {name: models.get(name, only) for name in recording.axis_names if models.get(name, only) is not None}
         drift_plot(recording, pairs, options.plot, title=f"{pipeline.kind} trained on {Path(source).name}")
     return model
+
+
+def _train_components_axes(frame, header: dict, labels: dict, cfg: dict, source, classes, options, records) -> tuple[dict, dict]:
+    """Each axis of a several-axis components file and its classes, trained as its one-axis chain would be.
+
+    Returns the models and the units, by axis name in the file's order.
+    """
+    from gyrocomp.commands.decompose import axis_view
+    from gyrocomp.errors import InputError
+    from gyrocomp.pipeline.train import train_parallel
+
+    by_axis = labels.get("axes")
+    if not isinstance(by_axis, dict) or list(by_axis) != list(header["axes"]):
+        raise InputError(f"{classes}: classes of axes {list(by_axis or [])} do not match the components' axes {list(header['axes'])}; classify that file")
+    trained, units = {}, {}
+    for axis in header["axes"]:
+        one, one_header = axis_view(frame, header, axis, str(source))
+        entries = by_axis[axis].get("components") if isinstance(by_axis[axis], dict) else None
+        if not isinstance(entries, list):
+            raise InputError(f"{classes}: axis {axis!r} has no `components` list")
+        prefix = f"{axis}_"
+        unprefixed = [
+            {**e, "name": e["name"][len(prefix) :]} if isinstance(e, dict) and str(e.get("name", "")).startswith(prefix) else e for e in entries
+        ]
+        one_labels = {**{k: v for k, v in labels.items() if k != "axes"}, "components": unprefixed}
+        trained[axis] = train_parallel(one, one_header, one_labels, cfg, source=options.config, seed=options.seed, inputs=records)
+        units[axis] = one_header["unit"]
+    return trained, units
 
 
 def drift_plot(recording, models: dict, path, *, title: str = "", compensated: dict | None = None) -> None:

@@ -22,16 +22,35 @@ BASELINE = "polynomial"
 
 def findings(report: dict) -> list[str]:
     """Plain statements from the scores: improvements, where a pipeline loses to the baseline, signal destroyed."""
-    rows = report["rows"]
-    raw = next(r for r in rows if r["method"] == "raw")
-    base = next((r for r in rows if r["method"] == BASELINE), None)
     out = []
     if not report["test"]["held_out"]:
         out.append("No test run was given: every score below is on the TRAINING run, so nothing was held out.")
+    several = _several(report)
+    for axis in dict.fromkeys(r.get("axis") for r in report["rows"]):
+        out += _axis_findings(report, [r for r in report["rows"] if r.get("axis") == axis], several)
+    for method in report["methods"]:
+        name = method_label({"method": method["name"], "mode": None, "axis": method.get("axis")}, several)
+        if method.get("overrides"):
+            out.append(f"{name} ran with changed settings: {', '.join(method['overrides'])}.")
+        for message in sorted(set(method.get("warnings", []))):
+            out.append(f"{name}: {message}")
+    return out
+
+
+def _several(report: dict) -> bool:
+    """Whether the report scores several axes (its rows then name the axis in every label)."""
+    return len(report.get("axes", ())) > 1
+
+
+def _axis_findings(report: dict, rows: list, several: bool) -> list[str]:
+    """The findings of one axis' rows (its raw row and its baseline are the axis' own)."""
+    raw = next(r for r in rows if r["method"] == "raw")
+    base = next((r for r in rows if r["method"] == BASELINE), None)
+    out = []
     for row in rows:
         if row["method"] == "raw":
             continue
-        label = method_label(row)
+        label = method_label(row, several)
         drift, raw_drift = row["residual_drift"]["std_deg_h"], raw["residual_drift"]["std_deg_h"]
         out.append(
             f"{label}: residual drift (std of {row['residual_drift']['block_s']:g} s means) "
@@ -56,11 +75,6 @@ def findings(report: dict) -> list[str]:
                 worse.append(f"signal RMS error {_f(kept['rms_error_dps'])} vs {_f(base['signal']['rms_error_dps'])} deg/s")
             if worse:
                 out.append(f"{label} does WORSE than the {BASELINE} baseline: {'; '.join(worse)}.")
-    for method in report["methods"]:
-        if method.get("overrides"):
-            out.append(f"{method['name']} ran with changed settings: {', '.join(method['overrides'])}.")
-        for message in sorted(set(method.get("warnings", []))):
-            out.append(f"{method['name']}: {message}")
     return out
 
 
@@ -92,10 +106,11 @@ def markdown(report: dict) -> str:
         "residual drift p-p [deg/h] | signal kept | signal RMS error [deg/s] | training [s] |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
+    several = _several(report)
     for row in report["rows"]:
         kept = row.get("signal")
         lines.append(
-            f"| {row['method']} | {row['mode'] or '-'} | {_f(row['arw']['value'])}{_src(row['arw'])} | "
+            f"| {_method_cell(row, several)} | {row['mode'] or '-'} | {_f(row['arw']['value'])}{_src(row['arw'])} | "
             f"{_f(row['bias_instability']['value'])}{_src(row['bias_instability'])} | "
             f"{_f(row['residual_drift']['std_deg_h'])} | {_f(row['residual_drift']['p2p_deg_h'])} | "
             f"{'-' if kept is None else _pct(kept['gain'])} | {'-' if kept is None else _f(kept['rms_error_dps'])} | "
@@ -117,17 +132,23 @@ def markdown(report: dict) -> str:
     lines += ["", "## Signal survival per part", "", "| method | mode | " + " | ".join(parts) + " |", "|---|---|" + "---|" * len(parts)]
     for row in report["rows"]:
         if row.get("signal"):
-            lines.append(f"| {row['method']} | {row['mode']} | " + " | ".join(_pct(row["signal"]["parts"][p]) for p in parts) + " |")
+            lines.append(f"| {_method_cell(row, several)} | {row['mode']} | " + " | ".join(_pct(row["signal"]["parts"][p]) for p in parts) + " |")
     lines += ["", "## Stage times [s]", "", "| method | stage | time |", "|---|---|---|"]
     for method in report["methods"]:
         for stage, seconds in method["stage_times_s"].items():
-            lines.append(f"| {method['name']} | {stage} | {seconds:.2f} |")
+            lines.append(f"| {_method_cell({'method': method['name'], 'axis': method.get('axis')}, several)} | {stage} | {seconds:.2f} |")
     lines += ["", f"Total: {report.get('total_time_s', float('nan')):.1f} s.", ""]
     return "\n".join(lines)
 
 
-def method_label(row: dict) -> str:
-    return row["method"] if row["mode"] is None else f"{row['method']} ({row['mode']})"
+def method_label(row: dict, with_axis: bool = False) -> str:
+    """``method (mode)``, followed by ``[axis]`` when `with_axis` (a report of several axes)."""
+    label = row["method"] if row["mode"] is None else f"{row['method']} ({row['mode']})"
+    return f"{label} [{row['axis']}]" if with_axis and row.get("axis") is not None else label
+
+
+def _method_cell(row: dict, several: bool) -> str:
+    return f"{row['method']} [{row['axis']}]" if several and row.get("axis") is not None else row["method"]
 
 
 def _seconds(value) -> str:

@@ -238,6 +238,52 @@ def test_a_parallel_pipeline_trains_every_axis_as_its_decompose_classify_train_c
         assert list(chain["axes"]) == [axis]
         assert model["axes"][axis]["segments"] == chain["axes"][axis]["segments"]
         assert model["axes"][axis]["training"] == chain["axes"][axis]["training"]
+    # the same chain on both axes at once: one components file, one classes file, one model
+    comps, classes = tmp_path / "both.parquet", tmp_path / "both_classes.json"
+    _invoke("decompose", path, "--config", "pe-lcd-anfis", "--rate-col", "gx,gz", "--temp-col", "temp", "--out", comps)
+    _invoke("classify", comps, "--config", "pe-lcd-anfis", "--out", classes)
+    _invoke("train", comps, classes, "--config", "pe-lcd-anfis", *fast, "--out", tmp_path / "both_model.json")
+    both = json.loads((tmp_path / "both_model.json").read_text())
+    assert list(both["axes"]) == ["gx", "gz"]
+    for axis in ("gx", "gz"):
+        assert both["axes"][axis]["segments"] == model["axes"][axis]["segments"]
+        assert both["axes"][axis]["training"] == model["axes"][axis]["training"]
+
+
+def test_decompose_and_classify_several_axes_equal_the_single_axis_runs(log3, tmp_path):
+    """`decompose --rate-col gx,gy,gz`: prefixed components equal each axis decomposed alone; classes per axis."""
+    path, _ = log3
+    comps = tmp_path / "c.parquet"
+    _invoke("decompose", path, "--method", "lcd", "--rate-col", "gx,gy,gz", "--temp-col", "temp", "--out", comps)
+    frame = pd.read_parquet(comps)
+    sidecar = json.loads(comps.with_suffix(".json").read_text())
+    assert list(sidecar["axes"]) == list(AXES)
+    _invoke("classify", comps, "--out", tmp_path / "classes.json")
+    classes = json.loads((tmp_path / "classes.json").read_text())
+    assert list(classes["axes"]) == list(AXES) and "components" not in classes
+    for axis in AXES:
+        single = tmp_path / f"{axis}.parquet"
+        _invoke("decompose", path, "--method", "lcd", "--rate-col", axis, "--temp-col", "temp", "--out", single)
+        alone = pd.read_parquet(single)
+        names = [c["name"] for c in json.loads(single.with_suffix(".json").read_text())["components"]]
+        assert [c["name"] for c in sidecar["axes"][axis]["components"]] == [f"{axis}_{n}" for n in names]
+        assert_allclose(frame[axis], alone["rate"], rtol=0, atol=0)
+        for name in names:
+            assert_allclose(frame[f"{axis}_{name}"], alone[name], rtol=0, atol=1e-12)
+        # the components add up to the axis (the decomposition's own identity, here on the file)
+        assert_allclose(frame[[f"{axis}_{n}" for n in names]].sum(axis=1), frame[axis], rtol=0, atol=1e-9)
+        _invoke("classify", single, "--out", tmp_path / f"{axis}_classes.json")
+        one = json.loads((tmp_path / f"{axis}_classes.json").read_text())["components"]
+        assert [{**e, "name": f"{axis}_{e['name']}"} for e in one] == classes["axes"][axis]["components"]
+        assert classes["axes"][axis]["components"][-1]["class"] == "drift"  # the trend of a 20 degC cycle's drift
+
+
+def test_decompose_several_axes_gives_the_same_bytes_for_any_workers(log3, tmp_path):
+    path, _ = log3
+    for workers in (1, 2):
+        _invoke("decompose", path, "--method", "iceemdan", "--ensemble", "4", "--rate-col", "gx,gy", "--temp-col", "temp", "--workers", workers, "--seed", 7, "--out", tmp_path / f"w{workers}.parquet")
+    assert pd.read_parquet(tmp_path / "w1.parquet").equals(pd.read_parquet(tmp_path / "w2.parquet"))
+    assert (tmp_path / "w1.json").read_bytes() == (tmp_path / "w2.json").read_bytes()
 
 
 def test_batch_passes_the_axes_and_reports_each(log3, tmp_path):
@@ -296,3 +342,49 @@ def test_diagnose_gives_a_verdict_per_axis_as_the_single_axis_runs(tmp_path):
         for model in ("baseline", "selected"):
             for run in ("fit", "holdout"):
                 assert_allclose(report["axes"][axis]["gap"][model][run], alone["gap"][model][run], rtol=0, atol=1e-12)
+
+
+def test_run_scores_every_method_on_every_axis_as_the_single_axis_runs(log3, tmp_path):
+    """`run compare TRAIN --test HOLD --rate-col gx,gz`: rows per axis, each equal to `run` on that column alone."""
+    path, _ = log3
+    hold = tmp_path / "hold.csv"
+    frame = pd.read_csv(path)
+    frame[list(AXES)] += 0.002 * np.random.default_rng(23).standard_normal((len(frame), len(AXES)))
+    frame.to_csv(hold, index=False)
+    methods = ["--set", 'run.methods=["polynomial", "elm"]']
+    _invoke("run", "compare", path, "--test", hold, "--rate-col", "gx,gz", "--temp-col", "temp", *methods, "--out", tmp_path / "both")
+    report = json.loads((tmp_path / "both" / "report.json").read_text())
+    assert report["axes"] == ["gx", "gz"]
+    assert [(r["axis"], r["method"]) for r in report["rows"]] == [(a, m) for a in ("gx", "gz") for m in ("raw", "polynomial", "elm")]
+    assert (tmp_path / "both" / "gz" / "elm" / "model.json").is_file()
+    assert "[gz]" in (tmp_path / "both" / "report.md").read_text()
+    for axis in ("gx", "gz"):
+        _invoke("run", "compare", path, "--test", hold, "--rate-col", axis, "--temp-col", "temp", *methods, "--out", tmp_path / axis)
+        alone = json.loads((tmp_path / axis / "report.json").read_text())["rows"]
+        mine = [r for r in report["rows"] if r["axis"] == axis]
+        for row, one in zip(mine, alone, strict=True):
+            assert (row["method"], row["mode"], one["axis"]) == (one["method"], one["mode"], axis)
+            assert_allclose(row["allan"]["adev"], one["allan"]["adev"], rtol=0, atol=1e-12)
+            assert_allclose(row["means_dph"], one["means_dph"], rtol=0, atol=1e-12)
+            assert_allclose(row["residual_drift"]["std_deg_h"], one["residual_drift"]["std_deg_h"], rtol=0, atol=1e-12)
+            if one["signal"] is not None:
+                assert_allclose(row["signal"]["gain"], one["signal"]["gain"], rtol=0, atol=1e-12)
+        # the polynomial takes out the drift the test put in: its 100 s means spread far less than the raw axis'
+        raw, poly = (next(r for r in mine if r["method"] == m) for m in ("raw", "polynomial"))
+        assert poly["residual_drift"]["std_deg_h"] < 0.05 * raw["residual_drift"]["std_deg_h"], axis
+
+
+def test_batch_run_reports_each_axis(log3, tmp_path):
+    """`batch run --rate-col gx,gz`: the key figures per axis, from the unit's own report."""
+    from gyrocomp.batch import run_batch
+
+    path, _ = log3
+    options = {"rate_col": "gx,gz", "temp_col": "temp", "overrides": ['run.methods=["polynomial"]']}
+    result = run_batch("run", [str(path)], tmp_path / "out", workers=1, options=options, files={"config": "compare"})
+    assert result.exit_code == 0, result.rows[0]
+    row = result.rows[0]
+    report = json.loads((tmp_path / "out" / "log3" / "report.json").read_text())
+    for r in report["rows"]:
+        label = r["method"] if r["mode"] is None else f"{r['method']}_{r['mode']}"
+        assert row[f"{r['axis']}_{label}_drift_std_deg_h"] == r["residual_drift"]["std_deg_h"]
+    assert row["gx_polynomial_causal_drift_std_deg_h"] < 0.05 * row["gx_raw_drift_std_deg_h"]
