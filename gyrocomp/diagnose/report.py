@@ -121,6 +121,8 @@ def _unexplained_lines(report):
     if not un:
         return []
     rate = f"family false-alarm rate {100 * un['family_alpha']:g} %"
+    if un.get("signature_alpha"):
+        rate += f", and {100 * un['signature_alpha']:g} % per selected noise term's signature"
     if not un["present"]:
         return [f"**Unexplained:** no structure the selected model does not predict ({rate})."]
     lines = [f"**Unexplained: present** -- the residual holds structure the selected model does not predict ({rate}):", ""]

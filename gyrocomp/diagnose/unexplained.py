@@ -43,7 +43,11 @@ and of no consequence); this only lowers their false-alarm rate.
 
 All tests on all runs form one family: Holm's step-down procedure [3]_
 keeps the probability that a recording the model *does* explain is called
-unexplained at most ``family_alpha``.
+unexplained at most ``family_alpha``. A selected noise term must also show
+its own signature (:func:`gyrocomp.diagnose.signature.check`): one that
+does not stands in for a residual the vocabulary does not explain, and the
+verdict is present with its reasons (each term adds its own family rate,
+``[signature] family_alpha``, by Bonferroni).
 
 For every test that rejects, :func:`verdict` says *where* (time window,
 temperature range, regime, timescale), gives a *hint* in words, and
@@ -73,6 +77,7 @@ from scipy import linalg, stats
 
 from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise
+from gyrocomp.diagnose import signature
 from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins
 
 __all__ = ["UnexplainedSettings", "get_config", "verdict", "holm", "fisher_g", "variance_segments", "variance_groups"]
@@ -102,7 +107,13 @@ def get_config(path="unexplained") -> UnexplainedSettings:
     return bind(UnexplainedSettings, load_config(path).get("unexplained", {}), f"{path} [unexplained]")
 
 
-def verdict(runs, model, settings: UnexplainedSettings = UnexplainedSettings(), baseline_residuals=None) -> dict:
+def verdict(
+    runs,
+    model,
+    settings: UnexplainedSettings = UnexplainedSettings(),
+    baseline_residuals=None,
+    signature_settings: signature.SignatureSettings = signature.SignatureSettings(),
+) -> dict:
     """Test the residual of `model` on `runs` for structure it does not predict.
 
     Parameters
@@ -116,6 +127,11 @@ def verdict(runs, model, settings: UnexplainedSettings = UnexplainedSettings(), 
     baseline_residuals : sequence of ndarray, optional
         Full-rate residual of the baseline on each run [deg/s], for the share
         of the gap.
+    signature_settings : gyrocomp.diagnose.signature.SignatureSettings
+        A selected ``rate_random_walk`` or ``bias_instability`` that does not
+        show its own signature (:func:`gyrocomp.diagnose.signature.check`,
+        its own family false-refusal rate) absorbs something the vocabulary
+        does not explain: the verdict is then present, with its reasons.
 
     Returns
     -------
@@ -140,13 +156,23 @@ def verdict(runs, model, settings: UnexplainedSettings = UnexplainedSettings(), 
             entry, hint = pr.describe(name)
             where.append({"run": pr.label, "test": name, "p": pr.tests[name]["p"], **entry})
             hints.append(f"{pr.label}: {hint}")
+    signatures = {}
+    for term in TERMS:
+        if term in getattr(model, "order", ()) and getattr(model.noise, term) > 0.0:
+            sig = signature.check(term, [p for _, p in runs], model, signature_settings)
+            signatures[term] = {"ok": sig.ok, "reasons": list(sig.reasons)}
+            if not sig.ok:
+                where.append({"run": "all", "test": f"signature:{term}", "p": sig.stats.get("alpha")})
+                hints.append(f"the selected {term} does not show its own signature: " + "; ".join(sig.reasons[:3]))
     size = {}
     for k, pr in enumerate(prepared):
         base = baseline_residuals[k] if baseline_residuals is not None else None
         size[pr.label] = pr.size(base, s)
     return {
-        "present": bool(any(rejected)),
+        "present": bool(any(rejected) or any(not v["ok"] for v in signatures.values())),
         "family_alpha": s.family_alpha,
+        "signatures": signatures,
+        "signature_alpha": signature_settings.family_alpha if signatures else None,
         "where": where,
         "hints": hints,
         "size": size,

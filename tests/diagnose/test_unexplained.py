@@ -115,6 +115,13 @@ def test_clean_recordings_are_not_flagged(terms, rrw):
     assert sum(flagged) <= 1
 
 
+def test_a_noise_term_standing_in_for_a_step_is_unexplained():
+    v = _verdict("step", 0.004, seed=5, terms=("rate_random_walk",))
+    assert v["present"] and v["signatures"]["rate_random_walk"]["ok"] is False
+    assert any(w["test"] == "signature:rate_random_walk" for w in v["where"])
+    assert any("does not show its own signature" in h for h in v["hints"])
+
+
 def test_holm():
     assert ux.holm([0.01, 0.02, 0.5], 0.05).tolist() == [True, True, False]
     assert ux.holm([0.03, 0.03, 0.03], 0.05).tolist() == [False, False, False]
