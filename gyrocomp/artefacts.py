@@ -160,7 +160,7 @@ def parse_json(name: str, raw: bytes) -> Any:
         huge integer, or nesting deeper than the interpreter's recursion.
     """
     try:
-        return json.loads(raw.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite_float)
+        return json.loads(raw.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite_float, parse_int=_double_int)
     except (UnicodeDecodeError, ValueError) as err:  # JSONDecodeError is a ValueError
         line = getattr(err, "lineno", None) or _line_of(raw, getattr(err, "token", None))
         at = f" line {line}" if line else ""
@@ -188,6 +188,17 @@ def _finite_float(text: str) -> float:
     if not math.isfinite(value):
         raise _BadNumber(text, "overflows a double")
     return value
+
+
+def _double_int(text: str) -> int:
+    """A JSON integer beyond a double's range (no artefact number is) is refused, not read to overflow later."""
+    value = int(text)
+    if abs(value) > _LARGEST_DOUBLE_INT:
+        raise _BadNumber(text[:20] + "...", f"({len(text)} digits) overflows a double")
+    return value
+
+
+_LARGEST_DOUBLE_INT = int(sys.float_info.max)
 
 
 def _line_of(raw: bytes, token: str | None) -> int | None:

@@ -278,7 +278,10 @@ def check_float(
     """`value` as a finite float in [low, high] (or (low, high] when `low_open`)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise InputError(f"{owner}: `{name}` must be a number, got {value!r}")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:
+        raise InputError(f"{owner}: `{name}` = an integer of {len(str(abs(int(value))))} digits overflows a double") from None
     below = value <= low if low_open else value < low
     if not math.isfinite(value) or below or (high is not None and value > high):
         bracket = "(" if low_open else "["

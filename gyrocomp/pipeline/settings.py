@@ -102,8 +102,8 @@ class RateSettings:
     def __post_init__(self):
         if self.method != "savgol":
             raise InputError(f"[rate] method = {self.method!r}; the only method is 'savgol'")
-        if not self.window_s > 0:
-            raise InputError(f"[rate] window_s = {self.window_s!r} must be > 0 s")
+        if not 0 < self.window_s < float("inf"):
+            raise InputError(f"[rate] window_s = {self.window_s!r} must be a finite number > 0 s")
         if not 1 <= self.polyorder <= 4:
             raise InputError(f"[rate] polyorder = {self.polyorder!r} must be in 1..4")
 
