@@ -209,7 +209,8 @@ def test_lsm6dsm_bursts_read_as_segments_with_the_published_slopes():
 
 
 def test_the_command_line_says_what_resample_filled(tmp_path):
-    """`--resample` is never silent: a note on stderr, and the note in the artefact's inputs."""
+    """A gap: `allan` analyses each segment alone (never across the gap); `--resample` is never silent:
+    a note on stderr, and the note in the artefact's inputs."""
     import json
 
     from typer.testing import CliRunner
@@ -220,9 +221,13 @@ def test_the_command_line_says_what_resample_filled(tmp_path):
     path = tmp_path / "gappy.csv"
     pd.DataFrame({"time": t, "rate": np.random.default_rng(3).normal(0, 0.01, t.size)}).to_csv(path, index=False)
     out = tmp_path / "allan.json"
-    refused = CliRunner().invoke(app, ["allan", str(path), "--out", str(out)])
-    assert refused.exit_code == 2 and "line 402: sampling interval 200.5 s" in refused.stderr
-    assert not out.exists()
+    segmented = CliRunner().invoke(app, ["allan", str(path), "--out", str(out)])
+    assert segmented.exit_code == 0, segmented.output
+    assert "2 segments: 1 gaps, the longest 200.5 s (not interpolated)" in segmented.stderr
+    series = json.loads(out.read_text())["series"]
+    assert [s["name"] for s in series] == ["gappy.csv segment 1", "gappy.csv segment 2"]
+    for s in series:  # each segment alone: white noise of 0.01 deg/s at 2 Hz is ARW 0.424 deg/sqrt(h)
+        assert s["n"][0] == 399 and s["terms"]["arw"]["value"] == pytest.approx(0.01 * np.sqrt(0.5) * 60, rel=0.1)
     result = CliRunner().invoke(app, ["allan", str(path), "--out", str(out), "--resample"])
     assert result.exit_code == 0, result.output
     note = "resampled onto a uniform 0.5 s grid: 1 gaps filled by linear interpolation, the longest 200.5 s"

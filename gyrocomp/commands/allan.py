@@ -71,7 +71,10 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     (:func:`gyrocomp.streaming.read_chunks`, :func:`gyrocomp.allan.analyse_chunks`),
     so that a recording bigger than memory is fine (standard input, flight
     logs, time units other than seconds and `resample` read it whole);
-    its ``column`` the axis' name, and every series written to `out` (``-``
+    a recording with gaps is read whole and each of its segments analysed
+    as a series of its own (``<file> segment <k>``: an Allan deviation
+    never spans a gap, nothing is interpolated), segments too short for
+    the first tau left out; its ``column`` the axis' name, and every series written to `out` (``-``
     is stdout) as :func:`gyrocomp.allan.allan_artefact` and drawn in one
     plot. The bounds are left to :func:`check`, so that the artefacts exist
     when one is crossed.
@@ -99,38 +102,37 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     for path in inputs:
         usecols = [] if column == "rate" else [column]
         if str(path) != "-" and not options.resample and streaming.supports(path, options.columns):
-            reader = streaming.read_chunks(path, options.columns, usecols=usecols)
-            head = next(iter(reader))  # the axes and columns, from the first chunk
+            try:
+                one_path = _streamed(path, options, settings, usecols)
+            except streaming.GapError:
+                one_path = None  # a file with gaps: read whole, one series per segment
+            if one_path is not None:
+                found, record, found_units = one_path
+                series += found
+                units += found_units
+                records.append(record)
+                continue
+        rec = recordings.read_recording(
+            path, options.columns, min_samples=3, resample=options.resample, usecols=usecols, allow_gaps=not options.resample
+        )
+        if column != "rate" and column not in rec.columns:
+            raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
+        parts = rec.split()
+        for k, part in enumerate(parts, start=1):
+            label = Path(rec.name).name if len(parts) == 1 else f"{Path(rec.name).name} segment {k}"
+            if len(parts) > 1 and part.n_samples < 3:
+                continue
             if column == "rate":
-                values = {axis.name: ((lambda chunk, name=axis.name: chunk.axis(name).rate_dps), axis.unit) for axis in head.axes}
-            elif column in head.columns:
-                values = {column: ((lambda chunk: chunk.column(column)), "deg/s")}
+                values = {axis.name: (part.axis(axis.name).rate_dps, axis.unit) for axis in part.axes}
             else:
-                raise InputError(f"{head.name}: no column {column!r} to analyse; it has {', '.join(head.columns)}")
-            for name, (pick, unit) in values.items():
-                one = al.analyse_chunks(
-                    lambda: (pick(chunk) for chunk in reader), lambda: reader.fs_hz,
-                    taus=options.taus, name=Path(reader.name).name, column=name, settings=settings,
-                )
+                values = {column: (part.column(column), "deg/s")}
+            for name, (x, unit) in values.items():
+                one = al.analyse(x, rec.fs_hz, taus=options.taus, name=label, column=name, settings=settings)
                 _relabel(one, unit)
                 series.append(one)
                 units.append(unit)
-            records.append(reader.input_record())
-            continue
-        rec = recordings.read_recording(path, options.columns, min_samples=3, resample=options.resample, usecols=[] if column == "rate" else [column])
-        if column == "rate":
-            values = {axis.name: (rec.axis(axis.name).rate_dps, axis.unit) for axis in rec.axes}
-        elif column in rec.columns:
-            values = {column: (rec.column(column), "deg/s")}
-        else:
-            raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
-        for name, (x, unit) in values.items():
-            one = al.analyse(x, rec.fs_hz, taus=options.taus, name=Path(rec.name).name, column=name, settings=settings)
-            _relabel(one, unit)
-            series.append(one)
-            units.append(unit)
         records.append(rec.input_record())
-        del rec, values
+        del rec, parts
     resolved = {**settings_dict(settings), "taus": options.taus or settings.taus, "column": column}
     artefacts.write_json(out, al.allan_artefact(series, inputs=records, settings=resolved))
     if options.plot is not None:
@@ -138,6 +140,37 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
 
         plots.save(plots.allan_figure(series, unit=", ".join(dict.fromkeys(units)) or "deg/s"), options.plot, dpi=120)
     return series
+
+
+def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, dict, list]:
+    """The series of a CSV or Parquet file read chunk by chunk (:func:`gyrocomp.allan.analyse_chunks`).
+
+    Raises :class:`gyrocomp.streaming.GapError` before any series is made
+    when the file has a gap (the first pass reads it whole).
+    """
+    from gyrocomp import allan as al
+    from gyrocomp import streaming
+    from gyrocomp.errors import InputError
+
+    column = options.column
+    reader = streaming.read_chunks(path, options.columns, usecols=usecols)
+    head = next(iter(reader))  # the axes and columns, from the first chunk
+    if column == "rate":
+        values = {axis.name: ((lambda chunk, name=axis.name: chunk.axis(name).rate_dps), axis.unit) for axis in head.axes}
+    elif column in head.columns:
+        values = {column: ((lambda chunk: chunk.column(column)), "deg/s")}
+    else:
+        raise InputError(f"{head.name}: no column {column!r} to analyse; it has {', '.join(head.columns)}")
+    series, units = [], []
+    for name, (pick, unit) in values.items():
+        one = al.analyse_chunks(
+            lambda: (pick(chunk) for chunk in reader), lambda: reader.fs_hz,
+            taus=options.taus, name=Path(reader.name).name, column=name, settings=settings,
+        )
+        _relabel(one, unit)
+        series.append(one)
+        units.append(unit)
+    return series, reader.input_record(), units
 
 
 def check(series: Sequence, options: Options) -> None:
