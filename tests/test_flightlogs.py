@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import struct
 from pathlib import Path
 
@@ -16,7 +17,8 @@ pyulog = pytest.importorskip("pyulog")
 pytest.importorskip("pymavlink")
 
 REPO = Path(__file__).resolve().parents[1]
-PX4_SAMPLE = REPO.parent / "shared" / "real-data" / "px4-ulog-sample" / "sample_log_small.ulg"
+REAL_DATA = Path(os.environ.get("GYROCOMP_REAL_DATA", REPO.parent / "shared" / "real-data"))  # as tests/conftest.py
+PX4_SAMPLE = REAL_DATA / "px4-ulog-sample" / "sample_log_small.ulg"
 
 
 @pytest.mark.skipif(not PX4_SAMPLE.exists(), reason="shared real data absent")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,8 @@ from gyrocomp.errors import InputError
 from gyrocomp.recordings import ColumnSpec, read_recording
 
 REPO = Path(__file__).resolve().parents[1]
-LSM6DSM = REPO.parent / "shared" / "real-data" / "pan-lsm6dsm-tvac" / "pan_lsm6dsm_tvac_cold_2020-03-07.csv"
+REAL_DATA = Path(os.environ.get("GYROCOMP_REAL_DATA", REPO.parent / "shared" / "real-data"))  # as tests/conftest.py
+LSM6DSM = REAL_DATA / "pan-lsm6dsm-tvac" / "pan_lsm6dsm_tvac_cold_2020-03-07.csv"
 
 
 def _three_axis(n=200, fs=100.0, t0=0.0):
