@@ -38,7 +38,7 @@ import os
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -709,18 +709,29 @@ def _parse_csv(name: str, source: str | bytes, spec: ColumnSpec, usecols: Callab
     compression = "infer"
     if isinstance(source, bytes):
         source, compression = _stdio.BytesIO(source), None
+    with csv_errors(name):
+        return pd.read_csv(source, usecols=usecols, compression=compression, **csv_options(spec))
+
+
+def csv_options(spec: ColumnSpec) -> dict:
+    """The ``pandas.read_csv`` arguments of a column spec's CSV dialect (shared with the chunked reader)."""
     sep = _SEPARATOR_WORDS.get(spec.sep, spec.sep)
+    return {
+        "sep": sep,
+        "decimal": spec.decimal,
+        "comment": "#",
+        "skipinitialspace": True,
+        "engine": "python" if sep == r"\s+" else "c",
+    }
+
+
+@contextlib.contextmanager
+def csv_errors(name: str) -> Iterator[None]:
+    """Turn what ``pandas.read_csv`` raises on a bad file into one :class:`InputError` line naming `name`."""
+    import pandas as pd
+
     try:
-        return pd.read_csv(
-            source,
-            sep=sep,
-            decimal=spec.decimal,
-            comment="#",
-            skipinitialspace=True,
-            usecols=usecols,
-            compression=compression,
-            engine="python" if sep == r"\s+" else "c",
-        )
+        yield
     except pd.errors.EmptyDataError:
         raise InputError(f"{name}: file is empty") from None
     except pd.errors.ParserError as err:

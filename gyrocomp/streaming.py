@@ -135,23 +135,13 @@ class ChunkReader:
         import pandas as pd
 
         source = _HashingReader(sys.stdin.buffer, self._hash) if self.name == "-" else self.name
-        spec = self.columns
-        sep = recordings._SEPARATOR_WORDS.get(spec.sep, spec.sep)
-        try:
+        with recordings.csv_errors(self.name):
             reader = pd.read_csv(
-                source, sep=sep, decimal=spec.decimal, comment="#", skipinitialspace=True, usecols=self._wanted(),
-                compression=None if self.name == "-" else "infer", engine="python" if sep == r"\s+" else "c", chunksize=self.rows,
+                source, usecols=self._wanted(), compression=None if self.name == "-" else "infer", chunksize=self.rows,
+                **recordings.csv_options(self.columns),
             )
             with reader:
                 yield from reader
-        except pd.errors.EmptyDataError:
-            raise InputError(f"{self.name}: file is empty") from None
-        except pd.errors.ParserError as err:
-            raise InputError(f"{self.name}: unreadable CSV ({str(err).strip().splitlines()[-1]})") from None
-        except UnicodeDecodeError:
-            raise InputError(f"{self.name}: not a text CSV file") from None
-        except (OSError, EOFError, ValueError) as err:  # a damaged .gz/.zip
-            raise InputError(f"{self.name}: unreadable CSV ({str(err).strip().splitlines()[-1] if str(err).strip() else type(err).__name__})") from None
 
     def _wanted(self):
         """The file columns to read, as a predicate on names (None: all): time, the axes, `usecols`."""
