@@ -250,21 +250,42 @@ def _compensate_resolve(options, files: dict) -> dict:
 
 def _compensate_execute(source: Path, folder: Path, options, files: dict) -> tuple[dict, str]:
     from gyrocomp.commands import compensate as stage
-    from gyrocomp.pipeline import evaluate
 
     frame, summaries, rec, caught = stage.to_files([source, files["model"]], folder / "compensated.parquet", options)
     figures, messages = {}, {str(w.message) for w in caught}
     for axis, summary in summaries.items():
         for column in (stage.output_name(axis, "compensated"), axis):
-            try:
-                drift_figures = evaluate.residual_drift(frame[column].to_numpy(), rec.fs_hz)
-            except InputError:  # shorter than two blocks: no residual-drift figure
-                drift_figures = {"std_deg_h": None, "p2p_deg_h": None}
-            figures[f"{column}_drift_std_deg_h"] = drift_figures["std_deg_h"]
-            figures[f"{column}_drift_p2p_deg_h"] = drift_figures["p2p_deg_h"]
+            figures.update(_drift_figures(column, frame[column].to_numpy(), rec.fs_hz, summary["unit"]))
         messages |= set(summary.get("warnings", []))
     figures["n_warnings"] = len(messages)
     return figures, ""
+
+
+def _drift_figures(column: str, values, fs_hz: float, unit: str) -> dict:
+    """Residual drift (:func:`gyrocomp.pipeline.evaluate.residual_drift`) of one column, named in its axis' unit.
+
+    An angular rate [deg/s] gives ``<column>_drift_std_deg_h`` and
+    ``..._p2p_deg_h`` (block means in deg/h); an acceleration gives the
+    block means in its own unit, ``<column>_drift_std_m_s2`` and
+    ``..._p2p_m_s2``: an accelerometer axis has no deg/h. Shorter than two
+    blocks: both ``None``.
+    """
+    import numpy as np
+
+    from gyrocomp.pipeline import evaluate
+    from gyrocomp.pipeline.settings import EvaluateSettings
+
+    suffix = "deg_h" if unit == "deg/s" else unit.replace("/", "_").replace("^", "")
+    try:
+        if unit == "deg/s":
+            drift = evaluate.residual_drift(values, fs_hz)
+            std, p2p = drift["std_deg_h"], drift["p2p_deg_h"]
+        else:
+            means = evaluate.block_means(values, fs_hz, EvaluateSettings().block_s)
+            std, p2p = float(np.std(means)), float(np.ptp(means))
+    except InputError:  # shorter than two blocks: no residual-drift figure
+        std = p2p = None
+    return {f"{column}_drift_std_{suffix}": std, f"{column}_drift_p2p_{suffix}": p2p}
 
 
 # ---------------------------------------------------------------- run

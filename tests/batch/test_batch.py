@@ -242,3 +242,31 @@ def test_scheduler_without_dask_is_a_clear_exit_2(logs, tmp_path, monkeypatch):
     result = _invoke("allan", str(logs / "unit0.parquet"), "--out", str(tmp_path / "o"), "--scheduler", "tcp://127.0.0.1:1")
     assert result.exit_code == 2
     assert "pip install 'gyrocomp[dask]'" in result.output
+
+
+def test_compensate_names_the_drift_figures_in_each_axis_unit(tmp_path):
+    # A gyro axis and an accelerometer axis: the rate's residual drift is in deg/h, the
+    # acceleration's in its own unit (m/s^2), the figures named after it; no accel figure says deg/h.
+    import numpy as np
+
+    t = np.arange(4000.0)
+    temperature = 20.0 + 10.0 * np.sin(2 * np.pi * t / 4000.0)
+    rng = np.random.default_rng(3)
+    frame = pd.DataFrame({"time": t, "gx": 0.01 * (temperature - 25) + rng.normal(0, 1e-3, t.size),
+                          "az": 9.81 + 2e-3 * (temperature - 25) + rng.normal(0, 1e-4, t.size), "temperature": temperature})
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    frame.to_csv(logs / "imu.csv", index=False)
+    columns = ["--rate-col", "gx,az", "--rate-unit", "deg/s,m/s^2"]
+    model = tmp_path / "model.json"
+    trained = CliRunner().invoke(app, ["-q", "train", str(logs / "imu.csv"), "--config", "polynomial", "--out", str(model), *columns])
+    assert trained.exit_code == 0, trained.output
+    out = tmp_path / "comp"
+    result = _invoke("compensate", str(logs / "imu.csv"), "--model", str(model), "--out", str(out), "--workers", "1", *columns)
+    assert result.exit_code == 0, result.output
+    row = pd.read_csv(out / "summary.csv").iloc[0]
+    assert not [c for c in row.index if c.startswith("az") and "deg_h" in c]
+    raw_az = frame["az"].to_numpy()[:4000].reshape(40, 100).mean(axis=1)
+    assert row["az_drift_std_m_s2"] == pytest.approx(np.std(raw_az), rel=1e-9)
+    assert row["az_compensated_drift_std_m_s2"] < 0.2 * row["az_drift_std_m_s2"]
+    assert row["gx_drift_std_deg_h"] == pytest.approx(np.std(frame["gx"].to_numpy().reshape(40, 100).mean(axis=1)) * 3600, rel=1e-9)
