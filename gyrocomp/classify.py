@@ -88,6 +88,18 @@ class ClassifySettings:
         """The settings of the selected entropy."""
         return getattr(self, self.entropy)
 
+    def min_samples(self) -> tuple[int, str]:
+        """Fewest samples a component needs for the selected entropy, and the setting that asks for them.
+
+        Permutation entropy needs one ordinal pattern, (order - 1) delay + 1
+        samples (Bandt & Pompe 2002); sample entropy needs m + 2 (two
+        templates of length m + 1, Richman & Moorman 2000).
+        """
+        if self.entropy == "permutation":
+            pe = self.permutation
+            return (pe.order - 1) * pe.delay + 1, f"[classify.permutation] order = {pe.order}, delay = {pe.delay}"
+        return self.sample.m + 2, f"[classify.sample] m = {self.sample.m}"
+
     @property
     def noise_above(self) -> float:
         """Entropy above which a component is noise."""

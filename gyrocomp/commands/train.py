@@ -54,11 +54,13 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     """Fit the drift models of a pipeline and write ``model.json``.
 
     Given a recording, a model is fitted per sensor axis, each with the
-    same seed, in ``options.workers`` processes: a direct pipeline on
-    every sample of every gap-free segment (the temperature rate never
-    spans a gap); a parallel pipeline decomposes and classifies each axis
-    first, as ``decompose`` and ``classify`` would (one continuous run: a
-    gap is refused). Given components and classes, a parallel pipeline fits
+    same seed, in ``options.workers`` processes, on every sample of every
+    gap-free segment (the temperature rate never spans a gap): a direct
+    pipeline on the rate; a parallel pipeline decomposes and classifies
+    each axis first, as ``decompose`` and ``classify`` would, and with gaps
+    each segment on its own
+    (:func:`~gyrocomp.pipeline.train.train_parallel_segments`; a segment
+    too short to decompose is refused, named). Given components and classes, a parallel pipeline fits
     every axis they were decomposed from (a several-axis components file and
     its classes: each axis as its one-axis chain would).
 
@@ -102,7 +104,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     else:
         if rest:
             raise InputError(f"{options.config}: a direct pipeline ({pipeline.kind}) trains on the recording alone; drop {rest[0]}")
-        recording = recordings.read_recording(source, options.columns, require_temperature=True, min_samples=16, allow_gaps=not pipeline.parallel)
+        recording = recordings.read_recording(source, options.columns, require_temperature=True, min_samples=16, allow_gaps=True)
         trained = train_axes(recording, cfg, source=options.config, seed=options.seed, workers=options.workers)
         units = {axis.name: axis.unit for axis in recording.axes}
     model = model_file(trained, units)
@@ -184,7 +186,8 @@ def train_axes(recording, config: dict, *, source: str, seed: int | None, worker
 
     Each axis is trained alone (:meth:`~gyrocomp.recordings.Recording.axis`;
     :func:`gyrocomp.pipeline.train.train_direct` over its gap-free segments,
-    or decomposed, classified and :func:`~gyrocomp.pipeline.train.train_parallel`)
+    or decomposed, classified and :func:`~gyrocomp.pipeline.train.train_parallel`,
+    by segments :func:`~gyrocomp.pipeline.train.train_parallel_segments`)
     with the same seed, so the models do not depend on `workers`.
     """
     from gyrocomp.batch.backends import run_local
@@ -206,11 +209,13 @@ def _train_axis(task: dict) -> dict:
     from gyrocomp.config import bind, settings_dict
     from gyrocomp.decompose import DecomposeSettings, decompose
     from gyrocomp.pipeline.settings import pipeline_settings
-    from gyrocomp.pipeline.train import train_direct, train_parallel
+    from gyrocomp.pipeline.train import train_direct, train_parallel, train_parallel_segments
 
     recording, config, source, seed = task["recording"], task["config"], task["source"], task["seed"]
     if not pipeline_settings(config, source).parallel:
         return train_direct(recording, config, source=source, seed=seed, bounds=task["bounds"])
+    if len(task["bounds"]) > 1:
+        return train_parallel_segments(recording, config, source=source, seed=seed, bounds=task["bounds"])
     settings = bind(DecomposeSettings, config.get("decompose"), f"{source} [decompose]")
     classify_settings = bind(ClassifySettings, config.get("classify"), f"{source} [classify]")
     result = decompose(recording.rate_dps, settings, seed=seed)

@@ -25,6 +25,7 @@ from gyrocomp.errors import InputError
 
 __all__ = [
     "METHODS",
+    "MIN_SAMPLES",
     "DecomposeSettings",
     "Decomposition",
     "decompose",
@@ -33,6 +34,9 @@ __all__ = [
 ]
 
 METHODS = ("lcd", "iceemdan", "ceemdan", "emd")
+
+MIN_SAMPLES = 4
+"""Fewest samples :func:`decompose` takes: with fewer, no envelope through three extrema exists."""
 
 MAX_ENSEMBLE = 10_000
 """Most noise realisations of iceemdan/ceemdan: 20x the largest NR the papers use (500,
@@ -202,8 +206,8 @@ def _check_signal(x) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     if x.ndim != 1:
         raise InputError(f"signal must be 1-D, got shape {x.shape}")
-    if x.size < 4:
-        raise InputError(f"signal has {x.size} samples; decomposition needs at least 4")
+    if x.size < MIN_SAMPLES:
+        raise InputError(f"signal has {x.size} samples; decomposition needs at least {MIN_SAMPLES}")
     bad = np.flatnonzero(~np.isfinite(x))
     if bad.size:
         raise InputError(f"signal sample {bad[0]} is {x[bad[0]]!r}; samples must be finite")

@@ -92,6 +92,19 @@ class DenoiseSettings:
             if method not in METHODS:
                 raise InputError(f"denoise {cls} = {method!r}; choose one of {', '.join(METHODS)}")
 
+    def min_samples(self) -> tuple[int, str]:
+        """Fewest samples every class's method takes, and the setting that asks for them.
+
+        Savitzky-Golay fits its window (:func:`~gyrocomp.denoise.savgol.savgol`);
+        TFPF needs half its lag window plus one (:func:`~gyrocomp.denoise.tfpf.tfpf`);
+        ``drop`` and ``keep`` take any length.
+        """
+        need = {"drop": (1, ""), "keep": (1, "")}
+        need["savgol"] = (self.savgol.window, f"[denoise.savgol] window = {self.savgol.window}")
+        for method, window in (("tfpf_long", self.tfpf.long_window), ("tfpf_short", self.tfpf.short_window)):
+            need[method] = ((window - 1) // 2 + 1, f"[denoise.tfpf] {method[5:]}_window = {window}")
+        return max((need[getattr(self, cls)] for cls in CLASSES), key=lambda pair: pair[0])
+
 
 def apply(components, classes: Sequence, settings: DenoiseSettings = DenoiseSettings()) -> np.ndarray:
     """Denoise each component by the method its class gets.

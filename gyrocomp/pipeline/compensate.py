@@ -44,7 +44,7 @@ from gyrocomp.models._base import check_choice, check_float, finite_array
 from gyrocomp.pipeline.rate import CausalRate, check_described
 from gyrocomp.pipeline.settings import PIPELINE_KINDS, RateSettings
 from gyrocomp.streaming import CHUNK_ROWS
-from gyrocomp.pipeline.train import INPUTS, axis_models, segment_inputs, segments
+from gyrocomp.pipeline.train import INPUTS, axis_models, class_sums, segment_inputs
 
 __all__ = [
     "COMPENSATION_SCHEMA",
@@ -307,7 +307,8 @@ def compensate(
     bounds : sequence of slice or None
         Row ranges sampled without a gap (``None``: one). The temperature
         rate is estimated within each, never across a gap; ``full`` mode of
-        a parallel pipeline decomposes one continuous run and refuses several.
+        a parallel pipeline decomposes, classifies and denoises each on its
+        own (:func:`~gyrocomp.pipeline.train.class_sums`).
 
     Returns
     -------
@@ -322,11 +323,6 @@ def compensate(
     data = recording.data
     if "temperature" not in data.columns:
         raise InputError(f"{recording.name}: no `temperature` column; the drift model needs it")
-    if mode == "full" and model.parallel and bounds is not None and len(bounds) > 1:
-        raise InputError(
-            f"{recording.name}: {len(bounds)} segments (gaps in time); full mode decomposes one continuous run: "
-            "use --mode causal, or --resample to fill the gaps"
-        )
     temperature = data["temperature"].to_numpy(dtype=float)
     rate = data["rate"].to_numpy(dtype=float)
     X = model.inputs(temperature, recording.fs_hz, causal=(mode == "causal"), bounds=bounds)
@@ -339,10 +335,13 @@ def compensate(
     if mode == "full" and model.parallel:
         if seed is None:
             seed = model.obj.get("settings", {}).get("decompose_seed")
-        parts, classes = _parallel_segments(rate, model, seed, workers, callback)
+        parts, classes = _parallel_segments(recording, model, seed, workers, callback, bounds)
         summary["decompose_seed"] = seed
         compensated = sum(parts.values()) - drift_model
-        summary["classes"] = classes
+        if len(classes) == 1:
+            summary["classes"] = classes[0]
+        else:
+            summary["segment_classes"] = classes
     else:
         compensated = rate - drift_model
     frame = pd.DataFrame(
@@ -357,9 +356,10 @@ def compensate(
     return frame, summary
 
 
-def _parallel_segments(rate, model: DriftModel, seed, workers, callback):
-    from gyrocomp.classify import ClassifySettings, classify
-    from gyrocomp.decompose import DecomposeSettings, decompose
+def _parallel_segments(recording, model: DriftModel, seed, workers, callback, bounds):
+    """The class sums and classes of each gap-free range (:func:`~gyrocomp.pipeline.train.class_sums`), with the model's settings."""
+    from gyrocomp.classify import ClassifySettings
+    from gyrocomp.decompose import DecomposeSettings
     from gyrocomp.denoise import DenoiseSettings
 
     settings = model.obj.get("settings", {})
@@ -367,10 +367,10 @@ def _parallel_segments(rate, model: DriftModel, seed, workers, callback):
     decompose_settings = bind(DecomposeSettings, settings.get("decompose"), f"{name} settings.decompose")
     classify_settings = bind(ClassifySettings, settings.get("classify"), f"{name} settings.classify")
     denoise_settings = bind(DenoiseSettings, settings.get("denoise"), f"{name} settings.denoise")
-    result = decompose(rate, decompose_settings, seed=seed, workers=workers, callback=callback)
-    classes = classify(result.components, result.names, classify_settings)
-    labels = [entry["class"] for entry in classes]
-    return segments(np.asarray(result.components), labels, denoise_settings), classes
+    return class_sums(
+        recording.rate_dps, bounds, decompose_settings, classify_settings, denoise_settings,
+        seed=seed, time_s=recording.time_s, name=recording.name, workers=workers, callback=callback,
+    )
 
 
 class _Seen:

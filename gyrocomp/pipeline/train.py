@@ -42,7 +42,18 @@ from gyrocomp.pipeline.settings import (
     rate_settings,
 )
 
-__all__ = ["MODEL_SCHEMA", "MODEL_VERSION", "INPUTS", "train_direct", "train_parallel", "segments", "model_file", "axis_models"]
+__all__ = [
+    "MODEL_SCHEMA",
+    "MODEL_VERSION",
+    "INPUTS",
+    "train_direct",
+    "train_parallel",
+    "train_parallel_segments",
+    "segments",
+    "class_sums",
+    "model_file",
+    "axis_models",
+]
 
 MODEL_SCHEMA = "gyrocomp.model"
 MODEL_VERSION = "2.0"
@@ -175,6 +186,174 @@ def train_parallel(
         inputs=inputs or [],
         extra=extra,
     )
+
+
+def train_parallel_segments(
+    recording: recordings.Recording,
+    config: dict,
+    *,
+    source: str = "config",
+    seed: int | None = 0,
+    bounds,
+    workers: int = 1,
+    callback=None,
+) -> dict:
+    """Fit a parallel pipeline on a recording with gaps: each gap-free segment decomposed on its own.
+
+    Each row range of `bounds` is decomposed, classified and denoised by
+    itself (:func:`class_sums`: nothing spans a gap, nothing is
+    interpolated, no sample is left out); the class sums of the ranges,
+    end to end, are the learners' targets, against (T, dT/dt) estimated
+    within each range, as :func:`train_direct` does.
+
+    Parameters
+    ----------
+    recording : gyrocomp.recordings.Recording
+        One axis in ``rate``, with ``temperature``.
+    config : dict
+        A loaded pipeline config with ``[pipeline] parallel = true``.
+    source : str
+        The config's name.
+    seed : int or None
+        Seed of the decomposition of every range and of every learner.
+    bounds : sequence of slice
+        The recording's gap-free row ranges (:attr:`~gyrocomp.recordings.Recording.segments`).
+    workers : int
+        Processes for each decomposition's ensemble.
+    callback : callable(done, total) or None
+        Progress, one step per range.
+
+    Returns
+    -------
+    dict
+        The model of one axis, as :func:`train_parallel` (``decompose_seed``
+        the seed of every range); ``training.segment_classes`` holds the
+        classes found in each range.
+
+    Raises
+    ------
+    InputError
+        A range too short to decompose (named, :func:`class_sums`), or no
+        component of any range classed drift.
+    """
+    from gyrocomp.classify import ClassifySettings
+    from gyrocomp.decompose import DecomposeSettings
+    from gyrocomp.denoise import DenoiseSettings
+
+    pipeline = pipeline_settings(config, source)
+    if not pipeline.parallel:
+        raise InputError(f"{source}: [pipeline] parallel = false; train a direct pipeline with train_direct")
+    decompose_cfg = bind(DecomposeSettings, config.get("decompose"), f"{source} [decompose]")
+    classify_cfg = bind(ClassifySettings, config.get("classify"), f"{source} [classify]")
+    denoise_cfg = bind(DenoiseSettings, config.get("denoise"), f"{source} [denoise]")
+    temperature = _temperature_of(recording.data, recording.name)
+    parts, classes = class_sums(
+        recording.rate_dps, bounds, decompose_cfg, classify_cfg, denoise_cfg,
+        seed=seed, time_s=recording.time_s, name=recording.name, workers=workers, callback=callback,
+    )
+    found = [entry for entries in classes for entry in entries]
+    if not any(entry["class"] == "drift" for entry in found):
+        raise InputError(f"{recording.name}: no component of any segment is classed drift; the drift segment is what the model learns")
+    targets = {"drift": parts["drift"]}
+    if "mixed" in model_settings(config, source, parallel=True).segments:
+        targets["mixed"] = parts["mixed"]
+    settings = {
+        "pipeline": settings_dict(pipeline),
+        "decompose": settings_dict(decompose_cfg),
+        "decompose_seed": seed,
+        "classify": settings_dict(classify_cfg),
+        "denoise": settings_dict(denoise_cfg),
+    }
+    members = {seg: list(dict.fromkeys(e["name"] for e in found if e["class"] == seg)) for seg in targets}
+    extra = {"segments": {seg: {"components": members[seg]} for seg in targets}, "segment_classes": classes}
+    return _fit(
+        targets, temperature, recording.fs_hz, config, source=source, seed=seed,
+        settings=settings, inputs=[recording.input_record()], extra=extra, bounds=bounds,
+    )
+
+
+def class_sums(
+    rate,
+    bounds,
+    decompose_settings,
+    classify_settings,
+    denoise_settings,
+    *,
+    seed: int | None,
+    time_s=None,
+    name: str = "recording",
+    workers: int = 1,
+    callback=None,
+) -> tuple[dict, list]:
+    """Decompose, classify and denoise each gap-free row range on its own; the class sums end to end.
+
+    A parallel pipeline's signal path (Cao et al. 2021, Fig. 5; Zhang et
+    al. 2024, section 3.7) run on each range of `bounds` alone, so that no
+    component, entropy or filter window spans a gap, and no sample is
+    interpolated or dropped.
+
+    Parameters
+    ----------
+    rate : array_like, shape (n_samples,)
+        The axis' values [deg/s, or the axis' unit].
+    bounds : sequence of slice or None
+        Row ranges sampled without a gap, covering the rows (``None``: one).
+    decompose_settings, classify_settings, denoise_settings
+        :class:`~gyrocomp.decompose.DecomposeSettings`,
+        :class:`~gyrocomp.classify.ClassifySettings`,
+        :class:`~gyrocomp.denoise.DenoiseSettings`.
+    seed : int or None
+        Seed of every range's decomposition.
+    time_s : array_like or None
+        Time stamps [s], to name a range in messages.
+    name : str
+        The recording's name, for messages.
+    workers : int
+        Processes for the decomposition's ensemble.
+    callback : callable(done, total) or None
+        Progress: the decomposition's own for one range, else one step per range.
+
+    Returns
+    -------
+    parts : dict of str to ndarray
+        ``noise``, ``mixed``, ``drift`` as :func:`segments`, each range's in its rows.
+    classes : list of list of dict
+        The classes of each range's components (:func:`gyrocomp.classify.classify`).
+
+    Raises
+    ------
+    InputError
+        A range shorter than the decomposition, the entropy or a class's
+        denoiser needs, naming the range, its time span, its length and
+        the setting; such a range is never dropped silently.
+    """
+    from gyrocomp.classify import classify
+    from gyrocomp.decompose import MIN_SAMPLES, decompose
+
+    rate = np.asarray(rate, dtype=float)
+    bounds = [slice(0, rate.size)] if bounds is None else list(bounds)
+    need, why = max((MIN_SAMPLES, "the decomposition"), classify_settings.min_samples(), denoise_settings.min_samples(), key=lambda p: p[0])
+    for k, rows in enumerate(bounds):
+        n = rows.stop - rows.start
+        if n < need:
+            where = "" if time_s is None else f", t = {time_s[rows.start]:.6g}..{time_s[rows.stop - 1]:.6g} s"
+            raise InputError(
+                f"{name}: segment {k + 1} of {len(bounds)} (samples {rows.start}..{rows.stop - 1}{where}) has {n} samples, "
+                f"fewer than the {need} that {why} needs; a decomposition pipeline decomposes each gap-free segment "
+                "on its own and drops none: remove that segment's rows, or train a direct pipeline (bp, elm, polynomial)"
+            )
+    parts = {cls: np.empty(rate.size) for cls in ("noise", "mixed", "drift")}
+    classes = []
+    for k, rows in enumerate(bounds):
+        step = callback if len(bounds) == 1 else None
+        result = decompose(rate[rows], decompose_settings, seed=seed, workers=workers, callback=step)
+        entries = classify(result.components, result.names, classify_settings)
+        for cls, values in segments(np.asarray(result.components), [e["class"] for e in entries], denoise_settings).items():
+            parts[cls][rows] = values
+        classes.append(entries)
+        if callback is not None and len(bounds) > 1:
+            callback(k + 1, len(bounds))
+    return parts, classes
 
 
 def segments(stack: np.ndarray, labels, denoise_settings) -> dict:
@@ -329,6 +508,8 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
     }
     if extra.get("training_classes") is not None:
         body["training"]["classes"] = extra["training_classes"]
+    if extra.get("segment_classes") is not None:
+        body["training"]["segment_classes"] = extra["segment_classes"]
     return {**header, **body}
 
 
