@@ -135,22 +135,19 @@ class ChunkReader:
         import pandas as pd
 
         source = _HashingReader(sys.stdin.buffer, self._hash) if self.name == "-" else self.name
+        wanted = recordings.wanted_columns(self.columns, self.usecols)
         with recordings.csv_errors(self.name):
             reader = pd.read_csv(
-                source, usecols=self._wanted(), compression=None if self.name == "-" else "infer", chunksize=self.rows,
+                source, compression=None if self.name == "-" else "infer", chunksize=self.rows,
                 **recordings.csv_options(self.columns),
             )
-            with reader:
-                yield from reader
-
-    def _wanted(self):
-        """The file columns to read, as a predicate on names (None: all): time, the axes, `usecols`."""
-        import fnmatch
-
-        if self.usecols is None:
-            return None
-        patterns = (self.columns.time, *self.columns.rate_patterns, *self.usecols)
-        return lambda c: any(fnmatch.fnmatchcase(str(c), p) for p in patterns)
+        with reader:
+            while True:
+                with recordings.csv_errors(self.name):  # each chunk's rows checked as the whole-file reader checks them
+                    frame = next(reader, None)
+                if frame is None:
+                    return
+                yield recordings.keep_columns(frame, wanted)
 
     def _parquet_frames(self):
         import pyarrow as pa
@@ -163,7 +160,7 @@ class ChunkReader:
         except (pa.ArrowInvalid, OSError) as err:
             raise InputError(f"{self.name}: not a readable Parquet file ({err})") from None
         self.metadata = artefacts.parquet_header(self.name, parquet.schema_arrow.metadata)
-        keep = self._wanted()
+        keep = recordings.wanted_columns(self.columns, self.usecols)
         wanted = [c for c in parquet.schema_arrow.names if keep is None or keep(c)]
         for group in range(parquet.num_row_groups):
             table = parquet.read_row_group(group, columns=wanted)

@@ -262,3 +262,90 @@ def test_an_error_that_names_no_file_is_given_the_inputs(tmp_path):
         failing("allan: unknown table")([x], tmp_path / "a.json")
     with pytest.raises(InputError, match=r"^" + re.escape(f"{x} line 3: bad")):
         failing(f"{x} line 3: bad")([x], tmp_path / "a.json")
+
+
+def _heating_and_cooling(path: Path, n: int = 600) -> list[str]:
+    """Write a CSV recording (time, rate, temperature heating and cooling) to `path`; return its lines."""
+    t = np.arange(n, dtype=float)
+    rate = 0.01 * np.random.default_rng(0).standard_normal(n)
+    text = pd.DataFrame({"time": t, "rate": rate, "temperature": 25.0 + 10.0 * np.sin(2 * np.pi * t / n)}).to_csv(index=False)
+    path.write_text(text)
+    return text.splitlines()
+
+
+def _extra_field(path: Path, line: int) -> None:
+    """That recording, with a fourth field on file line `line`."""
+    lines = _heating_and_cooling(path)
+    lines[line - 1] += ",7"
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.fixture(scope="module")
+def trained_model(tmp_path_factory) -> Path:
+    """A polynomial model.json, trained once on that recording, for the commands that need one."""
+    folder = tmp_path_factory.mktemp("model")
+    _heating_and_cooling(folder / "clean.csv")
+    result = CliRunner().invoke(app, ["train", str(folder / "clean.csv"), "--config", "polynomial", "--out", str(folder / "m.json")])
+    assert result.exit_code == 0, result.output
+    return folder / "m.json"
+
+
+FIELD_LINE = r"extra\.csv line 5: 4 fields, the header has 3$"
+"""Line 5 of extra.csv has 4 fields: every command names the file, the line and the count, in the same words."""
+
+FIELD_CASES = [
+    # (case id, argv); every one reads extra.csv as a recording: exit 2 and FIELD_LINE
+    ("allan-streamed", ["allan", "extra.csv", "--out", "a.json"]),
+    ("allan-whole-file", ["allan", "extra.csv", "--resample", "--out", "a.json"]),
+    ("train", ["train", "extra.csv", "--config", "polynomial", "--out", "m2.json"]),
+    ("compensate-causal-streamed", ["compensate", "extra.csv", "m.json", "--out", "c.parquet"]),
+    ("compensate-full-whole-file", ["compensate", "extra.csv", "m.json", "--mode", "full", "--out", "c.parquet"]),
+    ("decompose", ["decompose", "extra.csv", "--out", "c.parquet"]),
+    ("diagnose-fit", ["diagnose", "extra.csv", "--out", "d.json"]),
+    ("diagnose-holdout", ["diagnose", "x.parquet", "--holdout", "extra.csv", "--out", "d.json"]),
+    ("run-train", ["run", "compare", "extra.csv", "--out", "run"]),
+    ("run-test", ["run", "compare", "x.parquet", "--test", "extra.csv", "--out", "run"]),
+    ("simulate-profile", ["simulate", "--profile", "extra.csv", "--out", "s.parquet"]),
+]
+
+
+@pytest.mark.parametrize("argv", [c[1] for c in FIELD_CASES], ids=[c[0] for c in FIELD_CASES])
+def test_a_row_with_an_extra_field_is_refused_by_every_command(tmp_path, monkeypatch, trained_model, argv):
+    """A CSV row with more fields than the header: the same one line from the whole-file and the chunked reader (issue 21 item 12)."""
+    _setup(tmp_path)
+    _extra_field(tmp_path / "extra.csv", 5)
+    (tmp_path / "m.json").write_bytes(trained_model.read_bytes())
+    _check_case(tmp_path, monkeypatch, argv, 2, FIELD_LINE)
+
+
+def test_a_row_with_an_extra_field_fails_its_batch_input(tmp_path, monkeypatch):
+    """``batch`` records the same line for the input (exit 2, every input bad)."""
+    _extra_field(tmp_path / "extra.csv", 5)
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, ["batch", "allan", "extra.csv", "--out", "b", "--workers", "1"])
+    assert result.exit_code == 2, result.output
+    summary = pd.read_csv(tmp_path / "b" / "summary.csv")
+    assert list(summary["status"]) == ["failed"]
+    assert re.search(FIELD_LINE, summary["error"][0]), summary["error"][0]
+
+
+@pytest.mark.parametrize("command", [["allan", "--out", "a.json"], ["train", "--config", "polynomial", "--out", "m.json"]], ids=["allan", "train"])
+def test_an_extra_field_in_the_first_data_row_is_refused_not_read_as_an_index(tmp_path, monkeypatch, command):
+    """pandas would take the first field of every row for an index and shift the columns; both readers refuse it."""
+    _setup(tmp_path)
+    _extra_field(tmp_path / "extra.csv", 2)
+    _check_case(tmp_path, monkeypatch, [command[0], "extra.csv", *command[1:]], 2, r"extra\.csv: the first data row has more fields than the header \(")
+
+
+def test_a_trailing_separator_on_every_row_reads_the_columns_in_place(tmp_path):
+    """``0,1,20,`` (a logger ending each line with the separator) is read as its header says, by both readers."""
+    from gyrocomp import recordings, streaming
+
+    frame = pd.DataFrame({"time": np.arange(50.0), "rate": np.linspace(-1, 1, 50), "temperature": np.linspace(20, 30, 50)})
+    lines = frame.to_csv(index=False).splitlines()
+    (tmp_path / "t.csv").write_text("\n".join([lines[0]] + [line + "," for line in lines[1:]]) + "\n")
+    whole = recordings.read_recording(tmp_path / "t.csv", usecols=[])
+    chunked = next(iter(streaming.read_chunks(tmp_path / "t.csv", usecols=[], rows=64)))
+    for rec in (whole, chunked):
+        np.testing.assert_array_equal(rec.time_s, frame["time"])
+        np.testing.assert_array_equal(rec.rate_dps, frame["rate"])

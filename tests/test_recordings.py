@@ -142,8 +142,11 @@ def test_semicolon_and_decimal_comma(tmp_path):
     rec = read_recording(path, ColumnSpec(sep=";", decimal=","))
     np.testing.assert_array_equal(rec.rate_dps, [1.5, 1.75, 2.0])
     np.testing.assert_array_equal(rec.temperature_c, [20.25, 20.5, 20.75])
-    with pytest.raises(InputError, match="one column only: is the separator another one\\? pass --sep"):
+    with pytest.raises(InputError, match=r"lab\.csv: the first data row has more fields than the header \(a header read as one column: pass --sep\)"):
         read_recording(path)
+    (tmp_path / "dots.csv").write_text("time;rate;temperature\n0.0;1.5;20.25\n0.5;1.75;20.5\n")
+    with pytest.raises(InputError, match="one column only: is the separator another one\\? pass --sep"):
+        read_recording(tmp_path / "dots.csv")
 
 
 def test_duplicate_stamps_refused_naming_the_line_or_merged(tmp_path):
