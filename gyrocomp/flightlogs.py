@@ -23,6 +23,10 @@ format, so ``--rate-unit`` and ``--time-unit`` do not apply. One recording
 has one time base: columns of one stream and instance (an ``IMU`` message
 carries gyro, accelerometer and temperature together; ULog logs the gyro
 and the accelerometer as separate topics with their own time stamps).
+Columns of several streams (``--rate-col 'sensor_*_0_[xyz]'``) are read
+as one recording per stream (:func:`read_logs`), each on its own time
+stamps and with its own temperature; nothing is interpolated from one
+time base onto another.
 
 pyulog and pymavlink are the optional extra ``gyrocomp[logs]``.
 
@@ -46,7 +50,7 @@ from gyrocomp.errors import InputError
 if TYPE_CHECKING:
     from gyrocomp.recordings import ColumnSpec
 
-__all__ = ["read_log"]
+__all__ = ["read_log", "read_logs"]
 
 ULOG_TOPICS = {"sensor_gyro": "rad/s", "sensor_accel": "m/s^2"}
 """ULog topics read, with the unit of their x, y, z fields."""
@@ -60,9 +64,10 @@ _DEFAULT_RATE = {"ulog": "sensor_gyro_0_[xyz]", "dataflash": "IMU_0_Gyr?"}
 
 @dataclasses.dataclass(frozen=True)
 class _Stream:
-    """One sensor stream of a log: its time stamps [µs] and columns."""
+    """One sensor stream of a log: its name, its key (the columns' prefix), its time stamps [µs] and columns."""
 
     name: str
+    key: str
     time_us: np.ndarray
     columns: dict
     units: dict
@@ -71,14 +76,7 @@ class _Stream:
 def read_log(name: str, kind: str, spec: ColumnSpec) -> tuple[dict[str, np.ndarray], ColumnSpec]:
     """The columns of the one stream `spec` selects, and `spec` resolved for them.
 
-    Parameters
-    ----------
-    name : str
-        Path of the log.
-    kind : {"ulog", "dataflash"}
-    spec : ColumnSpec
-        The column options; the default ``rate`` selects the first gyro, the
-        default ``temperature`` the chosen stream's temperature.
+    As :func:`read_logs`, for a caller that takes one time base.
 
     Returns
     -------
@@ -91,9 +89,47 @@ def read_log(name: str, kind: str, spec: ColumnSpec) -> tuple[dict[str, np.ndarr
     Raises
     ------
     InputError
+        As :func:`read_logs`, and columns of several streams (each has its
+        own time stamps; the message names the streams and the commands that
+        take them).
+    """
+    found = read_logs(name, kind, spec)
+    if len(found) > 1:
+        raise InputError(
+            f"{name}: the columns selected belong to {', '.join(stream for stream, _, _ in found)}, "
+            "which are logged with their own time stamps; read one stream per run "
+            "(allan, train and compensate take several, each on its own time base)"
+        )
+    _, columns, resolved = found[0]
+    return columns, resolved
+
+
+def read_logs(name: str, kind: str, spec: ColumnSpec) -> list[tuple[str, dict[str, np.ndarray], ColumnSpec]]:
+    """The columns of every stream `spec` selects, each with its own time stamps, and `spec` resolved for each.
+
+    Parameters
+    ----------
+    name : str
+        Path of the log.
+    kind : {"ulog", "dataflash"}
+    spec : ColumnSpec
+        The column options; the default ``rate`` selects the first gyro, the
+        default ``temperature`` each chosen stream's own temperature (an
+        explicit one is looked up in each stream's columns).
+
+    Returns
+    -------
+    list of (str, dict, ColumnSpec)
+        Per stream, in the log's order: its name (``sensor_gyro_0``,
+        ``IMU_1``), its columns (``time`` [µs, int64] and the stream's
+        columns) and `spec` with the axes and temperatures named one by one,
+        their units, and ``time_unit="us"``.
+
+    Raises
+    ------
+    InputError
         Unreadable log, no such stream or column (the message lists them),
-        columns of streams with separate time stamps, or a unit option
-        (the format fixes the units).
+        or a unit option (the format fixes the units).
     """
     options = (("--time-unit", spec.time_unit, None), ("--rate-unit", spec.rate_unit, "deg/s"), ("--temp-unit", spec.temperature_unit, "degC"))
     given = [option for option, value, default in options if value != default]
@@ -109,30 +145,27 @@ def read_log(name: str, kind: str, spec: ColumnSpec) -> tuple[dict[str, np.ndarr
     if not chosen:
         every = [c for s in streams for c in s.columns]
         raise InputError(f"{name}: no column matches {', '.join(repr(p) for p in patterns)}; the log has {', '.join(every)}")
-    if len(chosen) > 1:
-        raise InputError(
-            f"{name}: {', '.join(repr(p) for p in patterns)} selects columns of {', '.join(s.name for s in chosen)}, "
-            f"which are logged with their own time stamps; read one stream per run"
+    found = []
+    for stream in chosen:
+        axes = [c for c in stream.units if any(fnmatch.fnmatchcase(c, p) for p in patterns)]  # a glob skips the temperature
+        if not axes:
+            raise InputError(f"{name}: {', '.join(repr(p) for p in patterns)} selects no sensor axis; {stream.name} has {', '.join(stream.units)}")
+        if spec.temperature == "temperature":  # the default: the stream's own temperature
+            temps = [c for c in stream.columns if c not in stream.units]
+        else:
+            wanted = [p.strip() for p in spec.temperature.split(",") if p.strip()]
+            temps = [c for c in stream.columns if any(fnmatch.fnmatchcase(c, p) for p in wanted)]
+        resolved = dataclasses.replace(
+            spec,
+            time="time",
+            time_unit="us",
+            rate=",".join(axes),
+            rate_unit=",".join(stream.units[c] for c in axes),
+            temperature=",".join(temps) or "temperature",
+            temperature_unit="degC",
         )
-    stream = chosen[0]
-    axes = [c for c in stream.units if any(fnmatch.fnmatchcase(c, p) for p in patterns)]  # a glob skips the temperature
-    if not axes:
-        raise InputError(f"{name}: {', '.join(repr(p) for p in patterns)} selects no sensor axis; {stream.name} has {', '.join(stream.units)}")
-    if spec.temperature == "temperature":  # the default: the stream's own temperature
-        temps = [c for c in stream.columns if c not in stream.units]
-    else:
-        wanted = [p.strip() for p in spec.temperature.split(",") if p.strip()]
-        temps = [c for c in stream.columns if any(fnmatch.fnmatchcase(c, p) for p in wanted)]
-    resolved = dataclasses.replace(
-        spec,
-        time="time",
-        time_unit="us",
-        rate=",".join(axes),
-        rate_unit=",".join(stream.units[c] for c in axes),
-        temperature=",".join(temps) or "temperature",
-        temperature_unit="degC",
-    )
-    return {"time": stream.time_us, **stream.columns}, resolved
+        found.append((stream.key, {"time": stream.time_us, **stream.columns}, resolved))
+    return found
 
 
 def _read_ulog(name: str) -> list[_Stream]:
@@ -150,7 +183,7 @@ def _read_ulog(name: str) -> list[_Stream]:
         units = dict.fromkeys(columns, ULOG_TOPICS[data.name])
         if "temperature" in fields:
             columns[prefix + "temperature"] = np.asarray(fields["temperature"], dtype=float)
-        streams.append(_Stream(f"{data.name} instance {data.multi_id}", np.asarray(stamp, dtype=np.int64), columns, units))
+        streams.append(_Stream(f"{data.name} instance {data.multi_id}", prefix[:-1], np.asarray(stamp, dtype=np.int64), columns, units))
     return streams
 
 
@@ -182,7 +215,7 @@ def _read_dataflash(name: str) -> list[_Stream]:
         columns = {prefix + f: table[:, k + 1] for k, f in enumerate(fields[1:]) if not np.isnan(table[:, k + 1]).all()}
         units = {prefix + f: u for f, u in DATAFLASH_FIELDS.items()}
         time_us = np.array([r[0] for r in rows[instance]], dtype=np.int64)
-        streams.append(_Stream(f"IMU instance {instance}", time_us, columns, units))
+        streams.append(_Stream(f"IMU instance {instance}", prefix[:-1], time_us, columns, units))
     return streams
 
 

@@ -57,6 +57,7 @@ __all__ = [
     "AxisLimits",
     "PLAUSIBLE_DEGC",
     "read_recording",
+    "read_recordings",
     "recording_from_frame",
     "RATE_UNITS",
     "ACCELERATION_UNITS",
@@ -275,7 +276,9 @@ class Recording:
         Sample rate, from the median sampling interval.
     metadata : dict, optional
         The ``gyrocomp`` metadata of a Parquet file written by this tool
-        (the simulator stores its truth there), else empty.
+        (the simulator stores its truth there); for one stream of a flight
+        log (:func:`read_recordings`), ``stream``, its key (``sensor_gyro_0``);
+        else empty.
     axes : sequence of Channel, optional
         The sensor axes; default one angular rate in column ``rate``.
     temperatures : sequence of str, optional
@@ -545,6 +548,39 @@ def read_recording(
         _where=where,
         _owned=True,
     )
+
+
+def read_recordings(path: str | os.PathLike, columns: ColumnSpec = ColumnSpec(), **options) -> list[Recording]:
+    """The recordings of a file, one per time base: several for the streams of a flight log, else one.
+
+    A ULog logs ``sensor_gyro`` and ``sensor_accel`` (and each instance)
+    with their own time stamps. Given columns of several such streams,
+    each stream becomes a recording of its own, on its own time stamps,
+    with its own temperature and ``metadata["stream"]`` its key
+    (``sensor_gyro_0``): nothing is interpolated from one time base onto
+    another. Any other file is :func:`read_recording`.
+
+    Parameters
+    ----------
+    path, columns, **options
+        As :func:`read_recording`.
+
+    Returns
+    -------
+    list of Recording
+        In the log's stream order; a stream's axes keep their column names.
+    """
+    name = "-" if str(path) == "-" else os.fspath(path)
+    if _kind(name) not in ("ulog", "dataflash"):
+        return [read_recording(path, columns, **options)]
+    from gyrocomp import flightlogs
+
+    options.pop("usecols", None)  # a log's streams are read whole
+    sha = file_sha256(name)  # also the one-line error for a missing file
+    return [
+        recording_from_frame(frame, name=name, sha256=sha, columns=spec, metadata={"stream": key}, _where=("message", 1), _owned=True, **options)
+        for key, frame, spec in flightlogs.read_logs(name, _kind(name), columns)
+    ]
 
 
 def recording_from_frame(

@@ -151,3 +151,84 @@ def test_damaged_or_foreign_logs_give_one_line(tmp_path):
     _write_dataflash(formats_only, {0: {"TimeUS": []}})
     with pytest.raises(InputError, match="formats.bin: no IMU message in the log"):
         read_recording(formats_only)
+
+
+# -- gyro and accelerometer of a ULog in one run: each topic on its own time stamps --
+
+
+def _two_topic_ulog(path: Path) -> dict:
+    """The PX4 sample with sensor_gyro 0 (120 s at 200 Hz) and sensor_accel 0 (120 s at 100 Hz, stamps 1.7 ms
+    later) replaced, written with pyulog's write_ulog; both warm 30 -> 40 degC with a known drift. Returns the truth."""
+    log = pyulog.ULog(str(PX4_SAMPLE))
+    rng = np.random.default_rng(21)
+    truth = {}
+    for topic, fs, lag_us, drift in (("sensor_gyro", 200.0, 0, 0.002), ("sensor_accel", 100.0, 1700, 0.05)):
+        data = next(d for d in log.data_list if d.name == topic and d.multi_id == 0)
+        n = int(120 * fs)
+        t0 = int(data.data["timestamp"][0]) + lag_us
+        stamps = (t0 + np.round(np.arange(n) * 1e6 / fs)).astype(np.uint64)
+        temperature = (30.0 + 10.0 * np.arange(n) / n + 0.5 * np.sin(np.arange(n) / fs / 7.0)).astype(np.float32)
+        axes = {a: (drift * (temperature - 35.0) + rng.normal(0.0, 1e-3, n)).astype(np.float32) for a in "xyz"}
+        data.data = {**{k: np.resize(v, n) for k, v in data.data.items()}, "timestamp": stamps + 50, "timestamp_sample": stamps, **axes, "temperature": temperature}
+        truth[topic] = {"n": n, "fs": fs, "stamps": stamps}
+    log.write_ulog(str(path))
+    return truth
+
+
+def _cli(*args) -> None:
+    from typer.testing import CliRunner
+
+    from gyrocomp.cli import app
+
+    result = CliRunner().invoke(app, ["-q", *[str(a) for a in args]])
+    assert result.exit_code == 0, result.output
+
+
+@pytest.mark.skipif(not PX4_SAMPLE.exists(), reason="shared real data absent")
+def test_ulog_gyro_and_accel_in_one_run_each_on_its_own_time_base(tmp_path):
+    """allan, train and compensate take gyro and accel of one ULog together; each stream equals the same command
+    on that stream alone (to 1e-12), on its own stamps: nothing is put onto the other topic's time base."""
+    import json
+
+    import pandas as pd
+
+    from gyrocomp.recordings import read_recordings
+
+    path = tmp_path / "two.ulg"
+    truth = _two_topic_ulog(path)
+    both = "sensor_*_0_[xyz]"
+    streams = read_recordings(path, ColumnSpec(rate=both), require_temperature=True)
+    assert [r.metadata["stream"] for r in streams] == ["sensor_gyro_0", "sensor_accel_0"]
+    for rec, topic in zip(streams, ("sensor_gyro", "sensor_accel")):
+        stamps = truth[topic]["stamps"].astype(np.int64)
+        assert rec.n_samples == truth[topic]["n"] and rec.fs_hz == pytest.approx(truth[topic]["fs"], rel=1e-9)
+        assert rec.time_origin == f"{stamps[0]} us"
+    with pytest.raises(InputError, match="own time stamps; read one stream per run .allan, train and compensate take several"):
+        read_recording(path, ColumnSpec(rate=both))
+
+    _cli("allan", path, "--rate-col", both, "--out", tmp_path / "a.json")
+    series = {s["column"]: s for s in json.loads((tmp_path / "a.json").read_text())["series"]}
+    assert list(series) == [f"{t}_0_{a}" for t in ("sensor_gyro", "sensor_accel") for a in "xyz"]
+    _cli("train", path, "--rate-col", both, "--config", "polynomial", "--out", tmp_path / "m.json")
+    model = json.loads((tmp_path / "m.json").read_text())
+    assert list(model["axes"]) == list(series)
+    _cli("compensate", path, tmp_path / "m.json", "--rate-col", both, "--out", tmp_path / "c.parquet")
+    assert not (tmp_path / "c.parquet").exists()
+    for topic in ("sensor_gyro", "sensor_accel"):
+        alone = f"{topic}_0_[xyz]"
+        _cli("allan", path, "--rate-col", alone, "--out", tmp_path / f"a_{topic}.json")
+        for s in json.loads((tmp_path / f"a_{topic}.json").read_text())["series"]:
+            np.testing.assert_allclose(series[s["column"]]["adev"], s["adev"], rtol=1e-12)
+        _cli("train", path, "--rate-col", alone, "--config", "polynomial", "--out", tmp_path / f"m_{topic}.json")
+        for axis, one in json.loads((tmp_path / f"m_{topic}.json").read_text())["axes"].items():
+            assert model["axes"][axis]["segments"] == one["segments"] and model["axes"][axis]["training"] == one["training"]
+        _cli("compensate", path, tmp_path / f"m_{topic}.json", "--rate-col", alone, "--out", tmp_path / f"c_{topic}.parquet")
+        together = pd.read_parquet(tmp_path / f"c_{topic}_0.parquet")
+        by_itself = pd.read_parquet(tmp_path / f"c_{topic}.parquet")
+        assert len(together) == truth[topic]["n"]  # its own samples, none added from the other topic
+        pd.testing.assert_frame_equal(together, by_itself, rtol=1e-12)
+        assert (tmp_path / f"c_{topic}_0.json").is_file()
+        scale = 180 / np.pi if topic == "sensor_gyro" else 1.0  # the drift put in, in the recording's unit
+        for a in "xyz":
+            left = np.polyfit(together["temperature"], together[f"{topic}_0_{a}_compensated"], 1)[0]
+            assert abs(left) < 0.05 * (0.002 * scale if topic == "sensor_gyro" else 0.05)

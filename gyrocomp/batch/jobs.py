@@ -251,12 +251,13 @@ def _compensate_resolve(options, files: dict) -> dict:
 def _compensate_execute(source: Path, folder: Path, options, files: dict) -> tuple[dict, str]:
     from gyrocomp.commands import compensate as stage
 
-    frame, summaries, rec, caught = stage.to_files([source, files["model"]], folder / "compensated.parquet", options)
+    groups, summaries, caught = stage.to_files([source, files["model"]], folder / "compensated.parquet", options)
     figures, messages = {}, {str(w.message) for w in caught}
-    for axis, summary in summaries.items():
-        for column in (stage.output_name(axis, "compensated"), axis):
-            figures.update(_drift_figures(column, frame[column].to_numpy(), rec.fs_hz, summary["unit"]))
-        messages |= set(summary.get("warnings", []))
+    for _, frame, rec in groups:
+        for axis in rec.axis_names:
+            for column in (stage.output_name(axis, "compensated"), axis):
+                figures.update(_drift_figures(column, frame[column].to_numpy(), rec.fs_hz, summaries[axis]["unit"]))
+            messages |= set(summaries[axis].get("warnings", []))
     figures["n_warnings"] = len(messages)
     return figures, ""
 

@@ -72,7 +72,7 @@ def compensate(
     for axis, summary in summaries.items():
         figures = summary["figures"]
         console.print(
-            f"{out} [{axis}]: {n_samples} samples compensated by {summary['kind']} ({mode}); "
+            f"{summary.get('output', out)} [{axis}]: {figures.get('n_samples', n_samples)} samples compensated by {summary['kind']} ({mode}); "
             f"std {figures['rate_std']:.4g} -> {figures['compensated_std']:.4g} {summary['unit']}",
             markup=False,
             highlight=False,

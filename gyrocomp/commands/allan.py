@@ -71,6 +71,8 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     (:func:`gyrocomp.streaming.read_chunks`, :func:`gyrocomp.allan.analyse_chunks`),
     so that a recording bigger than memory is fine (standard input, flight
     logs, time units other than seconds and `resample` read it whole);
+    the streams of a flight log that the columns select are analysed each
+    on its own time stamps (:func:`gyrocomp.recordings.read_recordings`);
     a recording with gaps is read whole and each of its segments analysed
     as a series of its own (``<file> segment <k>``: an Allan deviation
     never spans a gap, nothing is interpolated), segments too short for
@@ -112,27 +114,28 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
                 units += found_units
                 records.append(record)
                 continue
-        rec = recordings.read_recording(
+        streams = recordings.read_recordings(
             path, options.columns, min_samples=3, resample=options.resample, usecols=usecols, allow_gaps=not options.resample
         )
-        if column != "rate" and column not in rec.columns:
-            raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
-        parts = rec.split()
-        for k, part in enumerate(parts, start=1):
-            label = Path(rec.name).name if len(parts) == 1 else f"{Path(rec.name).name} segment {k}"
-            if len(parts) > 1 and part.n_samples < 3:
-                continue
-            if column == "rate":
-                values = {axis.name: (part.axis(axis.name).rate_dps, axis.unit) for axis in part.axes}
-            else:
-                values = {column: (part.column(column), "deg/s")}
-            for name, (x, unit) in values.items():
-                one = al.analyse(x, rec.fs_hz, taus=options.taus, name=label, column=name, settings=settings)
-                _relabel(one, unit)
-                series.append(one)
-                units.append(unit)
-        records.append(rec.input_record())
-        del rec, parts
+        for rec in streams:  # a flight log's streams, each on its own time base
+            if column != "rate" and column not in rec.columns:
+                raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
+            parts = rec.split()
+            for k, part in enumerate(parts, start=1):
+                label = Path(rec.name).name if len(parts) == 1 else f"{Path(rec.name).name} segment {k}"
+                if len(parts) > 1 and part.n_samples < 3:
+                    continue
+                if column == "rate":
+                    values = {axis.name: (part.axis(axis.name).rate_dps, axis.unit) for axis in part.axes}
+                else:
+                    values = {column: (part.column(column), "deg/s")}
+                for name, (x, unit) in values.items():
+                    one = al.analyse(x, rec.fs_hz, taus=options.taus, name=label, column=name, settings=settings)
+                    _relabel(one, unit)
+                    series.append(one)
+                    units.append(unit)
+        records.append(_input_record(streams))
+        del streams, rec, parts
     resolved = {**settings_dict(settings), "taus": options.taus or settings.taus, "column": column}
     artefacts.write_json(out, al.allan_artefact(series, inputs=records, settings=resolved))
     if options.plot is not None:
@@ -171,6 +174,15 @@ def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, di
         series.append(one)
         units.append(unit)
     return series, reader.input_record(), units
+
+
+def _input_record(streams: Sequence) -> dict:
+    """The ``inputs`` entry of a file read as one recording or as several streams: one entry, every stream's notes."""
+    record = streams[0].input_record()
+    notes = [note for rec in streams for note in rec.notes]
+    if notes:
+        record["notes"] = notes
+    return record
 
 
 def check(series: Sequence, options: Options) -> None:

@@ -64,40 +64,75 @@ def to_files(
     rate is estimated within each segment, never across a gap. `out` ``-``
     writes the table as CSV to stdout, without sidecar.
 
+    The streams of a flight log that the columns select (ULog's
+    ``sensor_gyro`` and ``sensor_accel``: their own time stamps,
+    :func:`gyrocomp.recordings.read_recordings`) are compensated each on
+    its own time base and written each to its own table, `out` with
+    ``_<stream>`` before the suffix (``c_sensor_gyro_0.parquet`` and its
+    sidecar; the plot likewise): no stream is interpolated onto another's
+    time stamps.
+
     Returns
     -------
-    frame : pandas.DataFrame
-        ``time``, each axis, ``temperature``, then ``<axis>_drift_model``
-        and ``<axis>_compensated`` per axis; a single axis named ``rate``
-        gives the columns ``time``, ``rate``, ``temperature``,
-        ``drift_model``, ``compensated``.
+    groups : list of (path, pandas.DataFrame, gyrocomp.recordings.Recording)
+        Per time base (one, but for several streams of a log), the table
+        written, where, and its recording. A table has ``time``, each axis,
+        ``temperature``, then ``<axis>_drift_model`` and
+        ``<axis>_compensated`` per axis; a single axis named ``rate`` gives
+        the columns ``time``, ``rate``, ``temperature``, ``drift_model``,
+        ``compensated``.
     summaries : dict of str to dict
         Per axis, from :func:`~gyrocomp.pipeline.compensate.compensate`.
-    recording : gyrocomp.recordings.Recording
     caught : list of warnings.WarningMessage
         The warnings compensating raised (e.g. leaving the training temperature range).
     """
     import warnings
 
-    import pandas as pd
-
     from gyrocomp import artefacts, recordings
-    from gyrocomp.pipeline.compensate import compensate, load_models
+    from gyrocomp.errors import InputError
+    from gyrocomp.pipeline.compensate import load_models
 
     recording_path, model_path = inputs
     models = load_models(artefacts.read_json(model_path), str(model_path))
-    recording = recordings.read_recording(recording_path, options.columns, require_temperature=True, min_samples=2, resample=options.resample, allow_gaps=True)
-    pairs = _pair_axes(recording, models, str(model_path))
-    columns = {"time": recording.time_s, **{name: recording.axis(name).rate_dps for name in pairs}, "temperature": recording.temperature_c}
-    drift, compensated, summaries = {}, {}, {}
+    streams = recordings.read_recordings(recording_path, options.columns, require_temperature=True, min_samples=2, resample=options.resample, allow_gaps=True)
+    if len(streams) > 1 and str(out) == "-":
+        keys = ", ".join(rec.metadata["stream"] for rec in streams)
+        raise InputError(f"{recording_path}: {keys} have their own time stamps, one table each; give --out a file, not -")
+    groups, summaries = [], {}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        for name, model in pairs.items():
-            frame, summary = compensate(
-                recording.axis(name), model, options.mode, clamp=options.clamp, seed=options.seed, workers=options.workers, callback=progress, bounds=list(recording.segments)
-            )
-            drift[name], compensated[name] = frame["drift_model"].to_numpy(), frame["compensated"].to_numpy()
-            summaries[name] = {**summary, "model_axis": _model_axis(models, model), "unit": recording.axis(name).axes[0].unit}
+        for recording in streams:
+            path, plot = out, options.plot
+            if len(streams) > 1:
+                path, plot = (None if p is None else stream_path(p, recording.metadata["stream"]) for p in (out, options.plot))
+            pairs = _pair_axes(recording, models, str(model_path), alone=len(streams) == 1)
+            table, found = _compensate_stream(recording, pairs, models, path, plot, Path(model_path), options, progress)
+            groups.append((path, table, recording))
+            summaries.update(found)
+    return groups, summaries, list(caught)
+
+
+def stream_path(path: str | os.PathLike, stream: str) -> Path:
+    """The output of one stream of a flight log: `path` with ``_<stream>`` before its suffix."""
+    path = Path(path)
+    return path.with_name(f"{path.stem}_{stream}{path.suffix}")
+
+
+def _compensate_stream(recording, pairs: dict, models: dict, out, plot, model_path: Path, options: Options, progress) -> tuple:
+    """Compensate the axes of one recording (one time base) and write its table, sidecar and plot; the table and the summaries."""
+    import pandas as pd
+
+    from gyrocomp import artefacts
+    from gyrocomp.pipeline.compensate import compensate
+
+    columns = {"time": recording.time_s, **{name: recording.axis(name).rate_dps for name in pairs}, "temperature": recording.temperature_c}
+    drift, compensated, summaries = {}, {}, {}
+    for name, model in pairs.items():
+        frame, summary = compensate(
+            recording.axis(name), model, options.mode, clamp=options.clamp, seed=options.seed, workers=options.workers, callback=progress, bounds=list(recording.segments)
+        )
+        drift[name], compensated[name] = frame["drift_model"].to_numpy(), frame["compensated"].to_numpy()
+        summaries[name] = {**summary, "model_axis": _model_axis(models, model), "unit": recording.axis(name).axes[0].unit}
     for name in pairs:
         columns[output_name(name, "drift_model")] = drift[name]
     for name in pairs:
@@ -106,12 +141,12 @@ def to_files(
     if str(out) == "-":
         artefacts.write_table(out, table, {})
     else:
-        write(Path(out), table, summaries, recording, Path(model_path), options.mode, options.seed)
-    if options.plot is not None:
+        write(Path(out), table, summaries, recording, model_path, options.mode, options.seed)
+    if plot is not None:
         from gyrocomp.commands.train import drift_plot
 
-        drift_plot(recording, pairs, options.plot, title=f"{recording.name} compensated ({options.mode})", compensated=compensated)
-    return table, summaries, recording, list(caught)
+        drift_plot([recording], pairs, plot, title=f"{recording.name} compensated ({options.mode})", compensated=compensated)
+    return table, summaries
 
 
 def streams(inputs: Sequence[str | os.PathLike], options: Options = Options()) -> bool:
@@ -238,7 +273,9 @@ def compensate_files(inputs, out, options: Options = Options(), *, progress=None
     -------
     n_samples : int
     summaries : dict of str to dict
-        Per axis, with ``figures`` (``rate_std``, ``compensated_std``, ...).
+        Per axis, with ``figures`` (``n_samples``, ``rate_std``,
+        ``compensated_std``, ...) and, from :func:`to_files`, ``output``
+        (the table it is in: one per stream of a flight log).
     caught : list of warnings.WarningMessage
     """
     import numpy as np
@@ -251,10 +288,16 @@ def compensate_files(inputs, out, options: Options = Options(), *, progress=None
         except GapError:
             if str(inputs[0]) == "-":
                 raise
-    frame, summaries, _, caught = to_files(inputs, out, options, progress=progress)
-    for axis, summary in summaries.items():
-        summary["figures"] = {"rate_std": float(np.std(frame[axis])), "compensated_std": float(np.std(frame[output_name(axis, "compensated")]))}
-    return len(frame), summaries, caught
+    groups, summaries, caught = to_files(inputs, out, options, progress=progress)
+    for path, frame, recording in groups:
+        for axis in recording.axis_names:
+            summaries[axis]["output"] = str(path)
+            summaries[axis]["figures"] = {
+                "n_samples": len(frame),
+                "rate_std": float(np.std(frame[axis])),
+                "compensated_std": float(np.std(frame[output_name(axis, "compensated")])),
+            }
+    return sum(len(frame) for _, frame, _ in groups), summaries, caught
 
 
 def output_name(axis: str, what: str) -> str:
@@ -299,11 +342,11 @@ def write(path: Path, frame, summaries: dict, recording, model_path: Path, mode:
     return sidecar
 
 
-def _pair_axes(recording, models: dict, name: str) -> dict:
-    """The model of each axis of the recording: same name, or the one model of a one-axis file for a one-axis recording."""
+def _pair_axes(recording, models: dict, name: str, *, alone: bool = True) -> dict:
+    """The model of each axis of the recording: same name, or the one model of a one-axis file for a one-axis recording `alone` in its file."""
     from gyrocomp.errors import InputError
 
-    if len(models) == 1 and len(recording.axes) == 1:
+    if alone and len(models) == 1 and len(recording.axes) == 1:
         return {recording.axis_names[0]: next(iter(models.values()))}
     missing = [axis for axis in recording.axis_names if axis not in models]
     if missing:

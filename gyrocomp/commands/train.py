@@ -53,7 +53,9 @@ def written(out, options) -> list:
 def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, options: Options = Options()) -> dict:
     """Fit the drift models of a pipeline and write ``model.json``.
 
-    Given a recording, a model is fitted per sensor axis, each with the
+    Given a recording, a model is fitted per sensor axis (the streams of
+    a flight log each on their own time stamps,
+    :func:`gyrocomp.recordings.read_recordings`), each with the
     same seed, in ``options.workers`` processes, on every sample of every
     gap-free segment (the temperature rate never spans a gap): a direct
     pipeline on the rate; a parallel pipeline decomposes and classifies
@@ -104,23 +106,25 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     else:
         if rest:
             raise InputError(f"{options.config}: a direct pipeline ({pipeline.kind}) trains on the recording alone; drop {rest[0]}")
-        recording = recordings.read_recording(source, options.columns, require_temperature=True, min_samples=16, allow_gaps=True)
-        trained = train_axes(recording, cfg, source=options.config, seed=options.seed, workers=options.workers)
-        units = {axis.name: axis.unit for axis in recording.axes}
+        streams = recordings.read_recordings(source, options.columns, require_temperature=True, min_samples=16, allow_gaps=True)
+        trained, units = {}, {}
+        for recording in streams:  # a flight log's streams, each on its own time base
+            trained.update(train_axes(recording, cfg, source=options.config, seed=options.seed, workers=options.workers))
+            units.update({axis.name: axis.unit for axis in recording.axes})
     model = model_file(trained, units)
     artefacts.write_json(out, model)
     if options.plot is not None:
         from gyrocomp.pipeline.compensate import load_models
 
-        if pipeline.parallel:
+        if pipeline.parallel and rest:  # the components file's rate columns
             rates = list(units) if "axes" in header else ["rate"]
-            recording = recordings.recording_from_frame(
+            streams = [recordings.recording_from_frame(
                 frame[["time", *rates, "temperature"]], name=Path(source).name, columns=ColumnSpec(rate=",".join(rates), rate_unit=",".join(units.values()))
-            )
+            )]
         models = load_models(model, str(out))
         only = next(iter(models.values())) if len(models) == 1 else None  # one model: whatever its axis is called
-        pairs = {name: models.get(name, only) for name in recording.axis_names if models.get(name, only) is not None}
-        drift_plot(recording, pairs, options.plot, title=f"{pipeline.kind} trained on {Path(source).name}")
+        pairs = {name: models.get(name, only) for rec in streams for name in rec.axis_names if models.get(name, only) is not None}
+        drift_plot(streams, pairs, options.plot, title=f"{pipeline.kind} trained on {Path(source).name}")
     return model
 
 
@@ -152,14 +156,15 @@ def _train_components_axes(frame, header: dict, labels: dict, cfg: dict, source,
     return trained, units
 
 
-def drift_plot(recording, models: dict, path, *, title: str = "", compensated: dict | None = None) -> None:
+def drift_plot(streams, models: dict, path, *, title: str = "", compensated: dict | None = None) -> None:
     """:func:`gyrocomp.plots.drift_figure` of a run, one row per axis, with the model of each axis.
 
     Parameters
     ----------
-    recording : gyrocomp.recordings.Recording
+    streams : sequence of gyrocomp.recordings.Recording
+        The run's recordings (a flight log's streams: each axis on its own time base).
     models : dict of str to DriftModel
-        By the recording's axis names.
+        By the recordings' axis names.
     compensated : dict of str to ndarray or None
         Each axis compensated already; by default compensated here in causal mode.
     """
@@ -169,8 +174,9 @@ def drift_plot(recording, models: dict, path, *, title: str = "", compensated: d
     from gyrocomp.pipeline.compensate import compensate
 
     axes = []
+    owner = {name: rec for rec in streams for name in rec.axis_names}
     for name, model in models.items():
-        one = recording.axis(name)
+        one = owner[name].axis(name)
         if compensated is None:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # the training run's own ranges; compensate reports leaving them, the plot need not
