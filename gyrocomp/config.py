@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib.resources
+import numbers
 import os
 import tomllib
 from pathlib import Path
@@ -17,7 +18,7 @@ from typing import Any, Iterable, TypeVar
 
 from gyrocomp.errors import InputError
 
-__all__ = ["CONFIG_DIR", "PIPELINE_TABLES", "load_config", "apply_overrides", "check_tables", "bind", "settings_dict"]
+__all__ = ["CONFIG_DIR", "PIPELINE_TABLES", "SEED_MAX", "load_config", "apply_overrides", "check_tables", "bind", "settings_dict", "check_seed"]
 
 def _config_dir() -> Path:
     """``configs/`` of the source checkout this package runs from, else the installed package data."""
@@ -37,6 +38,30 @@ PIPELINE_TABLES = ("pipeline", "rate", "model", "decompose", "classify", "denois
 """Top-level tables of a pipeline config (``configs/pe-lcd-anfis.toml`` and its kin)."""
 
 T = TypeVar("T")
+
+
+SEED_MAX = 2**32 - 1
+"""Largest seed: scikit-learn's ``random_state`` (the BP learner's) and NumPy's legacy ``RandomState`` take 0..2**32-1."""
+
+
+def check_seed(seed: Any, where: str = "--seed") -> int | None:
+    """`seed` as an int in 0..:data:`SEED_MAX` (``None``, no seed given, passes).
+
+    Every command that takes a seed checks it here, when its options are
+    built, before anything is read or written; so do a simulator config's
+    ``run.seed``, a model's stored seed and a learner's ``seed``.
+
+    Raises
+    ------
+    InputError
+        Naming `where` (the option or setting): not an integer (a bool, a
+        float, text), negative, or above :data:`SEED_MAX`.
+    """
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or not 0 <= seed <= SEED_MAX:
+        raise InputError(f"{where} = {seed!r}: a seed must be an integer in 0..{SEED_MAX}")
+    return int(seed)
 
 
 def load_config(path: str | os.PathLike) -> dict:

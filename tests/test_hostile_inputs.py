@@ -26,6 +26,7 @@ from typer.testing import CliRunner
 
 from gyrocomp import commands
 from gyrocomp.cli import app
+from gyrocomp.errors import InputError
 
 
 def _recording(path: Path, n: int = 600) -> Path:
@@ -206,7 +207,16 @@ SETTING_CASES = [
     ("train-metadata-not-an-object", ["train", "list.parquet", "--config", "polynomial", "--out", "m.json"], 2, r"list\.parquet: gyrocomp metadata: expected a JSON object"),
     ("simulate-level-the-reader-refuses", ["simulate", "--profile", "soak-25", "--set", "profile.levels_c=[1000.0]", "--out", "s.parquet"], 2, r"profile\.levels_c = \(1000\.0,\) leaves \[-100, 200\] degC"),
     ("diagnose-tau-grid-zero", ["diagnose", "x.parquet", "--config", "diag.toml", "--out", "d.json"], 2, r"diag\.toml \[diagnose\]: diagnose\.tau_grid_points = 0"),
-    ("simulate-seed-negative", ["simulate", "--seed", "-1", "--out", "s.parquet"], 2, r"run\.seed \(--seed\) = -1 must be an integer >= 0"),
+    ("simulate-seed-negative", ["simulate", "--seed", "-1", "--out", "s.parquet"], 2, r"--seed = -1: a seed must be an integer in 0\.\.4294967295$"),
+    ("simulate-config-seed-negative", ["simulate", "--set", "run.seed=-1", "--out", "s.parquet"], 2, r"run\.seed = -1: a seed must be an integer in 0\.\.4294967295$"),
+    ("simulate-config-seed-not-an-integer", ["simulate", "--set", "run.seed=1.5", "--out", "s.parquet"], 2, r"\[run\]: `seed` = 1\.5 should be of type int"),
+    ("train-seed-negative", ["train", "x.parquet", "--config", "polynomial", "--seed", "-1", "--out", "m.json"], 2, r"--seed = -1: a seed must be"),
+    ("train-seed-beyond-32-bits", ["train", "x.parquet", "--config", "bp", "--seed", "4294967296", "--out", "m.json"], 2, r"--seed = 4294967296: a seed must be an integer in 0\.\.4294967295$"),
+    ("decompose-seed-negative", ["decompose", "x.parquet", "--seed", "-1", "--out", "c.parquet"], 2, r"--seed = -1: a seed must be"),
+    ("compensate-seed-negative", ["compensate", "x.parquet", "model.json", "--mode", "full", "--seed", "-1", "--out", "c.parquet"], 2, r"--seed = -1: a seed must be"),
+    ("run-seed-beyond-32-bits", ["run", "compare", "x.parquet", "--seed", "4294967296", "--out", "r"], 2, r"--seed = 4294967296: a seed must be"),
+    ("batch-compensate-seed-negative", ["batch", "compensate", "x.parquet", "--model", "model.json", "--seed", "-1", "--out", "b"], 2, r"--seed = -1: a seed must be"),
+    ("batch-run-seed-negative", ["batch", "run", "x.parquet", "--config", "compare", "--seed", "-1", "--out", "b"], 2, r"--seed = -1: a seed must be"),
     ("simulate-fs-huge", ["simulate", "--fs", "1e9", "--out", "s.parquet"], 2, r"run\.fs_hz \(--fs\) = 1000000000\.0 must be in \[0\.01, 100000\] Hz"),
     ("train-rate-window-beyond-recording", ["train", "x.parquet", "--config", "polynomial", "--set", "rate.window_s=1e9", "--out", "m.json"], 2, r"x\.parquet: \[rate\] window_s = 1e\+09 s is longer than the recording \(600 s\)"),
     ("decompose-ensemble-huge", ["decompose", "x.parquet", "--config", "iceemdan-se-tfpf-nsga2elm", "--set", "ensemble=1000000000", "--out", "c.parquet"], 2, r"ensemble = 1000000000; must be in 1\.\.10000"),
@@ -229,6 +239,23 @@ def test_bad_setting_is_refused(tmp_path, monkeypatch, argv, code, message):
     _check_case(tmp_path, monkeypatch, argv, code, message)
 
 
+@pytest.mark.parametrize("name", [n for n in commands.STAGES if "seed" in {f.name for f in dataclasses.fields(commands.stage(n).Options)}])
+@pytest.mark.parametrize("seed", [-1, 2**32, 1.5, True, "1"])
+def test_every_stage_with_a_seed_refuses_a_bad_one(name, seed):
+    """A stage that takes a seed (now or added later) checks it when its options are built, naming --seed."""
+    with pytest.raises(InputError, match=r"^--seed = .*: a seed must be an integer in 0\.\.4294967295$"):
+        commands.stage(name).Options(seed=seed)
+    assert commands.stage(name).Options(seed=2**32 - 1).seed == 2**32 - 1
+
+
+def test_a_seed_given_as_text_is_a_usage_error_naming_the_option(tmp_path):
+    """``--seed 1.5`` never reaches the check: the option's integer type refuses it (exit 2, naming --seed)."""
+    x = _recording(tmp_path / "x.parquet")
+    result = CliRunner().invoke(app, ["train", str(x), "--config", "polynomial", "--seed", "1.5", "--out", str(tmp_path / "m.json")])
+    assert result.exit_code == 2 and "'--seed'" in result.stderr and "Traceback" not in result.stderr
+    assert list(tmp_path.iterdir()) == [x]
+
+
 def test_allan_taus_list_form_is_read(tmp_path):
     """The documented list form of ``taus`` gives exactly those taus (in seconds)."""
     from gyrocomp.allan import get_config
@@ -246,7 +273,6 @@ def test_allan_taus_list_form_is_read(tmp_path):
 def test_an_error_that_names_no_file_is_given_the_inputs(tmp_path):
     """A library error about content (``savgol: 20 samples ...``) leaves a stage naming its input (issue 21 item 15)."""
     from gyrocomp.commands import allan as stage
-    from gyrocomp.errors import InputError
 
     def failing(message):
         @commands.guarded(stage.written)

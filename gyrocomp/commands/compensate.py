@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 from gyrocomp.commands import guarded
+from gyrocomp.config import check_seed
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files", "streams", "stream_to_files", "compensate_files", "write"]
@@ -41,6 +42,9 @@ class Options:
     workers: int = 1
     columns: ColumnSpec = ColumnSpec()
     resample: bool = False
+
+    def __post_init__(self):
+        check_seed(self.seed)
 
 
 def written(out, options) -> list:

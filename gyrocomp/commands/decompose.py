@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 from gyrocomp.commands import guarded
+from gyrocomp.config import check_seed
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files", "write", "write_axes", "table", "axis_view"]
@@ -45,6 +46,9 @@ class Options:
     columns: ColumnSpec = ColumnSpec()
     resample: bool = False
     plot: Optional[str | os.PathLike] = None
+
+    def __post_init__(self):
+        check_seed(self.seed)
 
     def settings(self):
         """The :class:`~gyrocomp.decompose.DecomposeSettings`: the config's table, then ``--set``, then method and ensemble."""

@@ -35,7 +35,7 @@ import numpy as np
 from gyrocomp import artefacts, recordings
 from gyrocomp.commands import Folder, guarded
 from gyrocomp.errors import InputError
-from gyrocomp.config import PIPELINE_TABLES, apply_overrides, bind, check_tables, load_config, settings_dict
+from gyrocomp.config import PIPELINE_TABLES, apply_overrides, bind, check_seed, check_tables, load_config, settings_dict
 from gyrocomp.pipeline import evaluate
 from gyrocomp.pipeline.compensate import compensate, load_model
 from gyrocomp.pipeline.settings import EvaluateSettings, RunSettings, SignalSettings, pipeline_settings
@@ -85,6 +85,9 @@ class Options:
     workers: int = 1
     overrides: tuple = ()
     columns: recordings.ColumnSpec = recordings.ColumnSpec()
+
+    def __post_init__(self):
+        check_seed(self.seed)
 
 
 def written(out, options) -> list:

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 from gyrocomp.commands import guarded
+from gyrocomp.config import check_seed
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
@@ -43,6 +44,9 @@ class Options:
     overrides: tuple = ()
     truth_columns: Optional[bool] = None
     columns: ColumnSpec = ColumnSpec()
+
+    def __post_init__(self):
+        check_seed(self.seed)
 
 
 def written(out, options) -> list:

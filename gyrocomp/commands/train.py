@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 from gyrocomp.commands import guarded
+from gyrocomp.config import check_seed
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["Options", "to_files"]
@@ -42,6 +43,9 @@ class Options:
     workers: int = 1
     columns: ColumnSpec = ColumnSpec()
     plot: Optional[str | os.PathLike] = None
+
+    def __post_init__(self):
+        check_seed(self.seed)
 
 
 def written(out, options) -> list:

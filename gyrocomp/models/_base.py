@@ -298,10 +298,10 @@ def check_choice(owner: str, name: str, value: Any, choices: tuple[str, ...]) ->
 
 
 def check_seed(owner: str, seed: Any) -> int | None:
-    """`seed` as None or a non-negative int."""
-    if seed is None:
-        return None
-    return check_int(owner, "seed", seed, 0)
+    """`seed` as None or an int in 0..2**32-1 (:func:`gyrocomp.config.check_seed`)."""
+    from gyrocomp.config import check_seed as check
+
+    return check(seed, f"{owner}: `seed`")
 
 
 def block_split(

@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from gyrocomp import recordings
-from gyrocomp.config import bind
+from gyrocomp.config import bind, check_seed
 from gyrocomp.errors import InputError
 from gyrocomp.models._base import check_choice, check_float, finite_array
 from gyrocomp.pipeline.rate import CausalRate, check_described
@@ -227,6 +227,8 @@ def _drift_model(obj: dict, name: str) -> DriftModel:
             _finite_range(f"{name}: training", key, obj["training"][key]["min"], obj["training"][key]["max"])
         kind = check_choice(name, "kind", obj["kind"], PIPELINE_KINDS)
         parallel, *clips = (_flag(name, key, obj[key]) for key in ("parallel", "clip_inputs", "clip_output"))
+        if parallel:  # full mode decomposes with it
+            check_seed(obj.get("settings", {}).get("decompose_seed"), f"{name}: settings.decompose_seed")
     except InputError:
         raise
     except (KeyError, TypeError, ValueError, IndexError, AttributeError) as err:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from gyrocomp.config import CONFIG_DIR, apply_overrides, bind, load_config
+from gyrocomp.config import CONFIG_DIR, apply_overrides, bind, check_seed, load_config
 from gyrocomp.errors import InputError
 from gyrocomp.sim.profile import ProfileSettings, unit_field
 from gyrocomp.sim.vocabulary import EFFECTS, KINDS
@@ -137,8 +137,7 @@ class RunSettings:
                 f"run.fs_hz (--fs) = {self.fs_hz!r} must be in [{limits.min_fs_hz:g}, {limits.max_fs_hz:g}] Hz, "
                 "the sample rates the recording reader accepts (configs/recordings.toml [time])"
             )
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise InputError(f"run.seed (--seed) = {self.seed!r} must be an integer >= 0")
+        check_seed(self.seed, "run.seed")
         if not self.duration_s >= 0:
             raise InputError(f"run.duration_s = {self.duration_s!r} must be >= 0 (0: the profile's length)")
 

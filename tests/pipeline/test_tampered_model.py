@@ -75,6 +75,7 @@ CASES = [
     ("polynomial", _set(("clip_inputs",), "no"), "clip_inputs"),
     ("polynomial", _set(("parallel",), 0), "parallel"),
     ("polynomial", _set(("kind",), "evil"), "kind"),
+    ("polynomial", lambda o: (o.__setitem__("parallel", True), o.setdefault("settings", {}).__setitem__("decompose_seed", -1)), "settings.decompose_seed = -1: a seed"),
     ("polynomial", lambda o: o["rate_estimator"]["causal_coefficients"].__setitem__(0, 0.5), "rate_estimator.causal_coefficients"),
     ("polynomial", lambda o: o["rate_estimator"]["causal_coefficients"].pop(), "rate_estimator.causal_coefficients"),
     ("polynomial", lambda o: o["rate_estimator"]["recursion"].__setitem__("slope_gain", 2 * o["rate_estimator"]["recursion"]["slope_gain"]), "rate_estimator.recursion.slope_gain"),
