@@ -30,6 +30,8 @@ divided by its standard deviation. Both maps are stored per segment in
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from gyrocomp import artefacts, recordings
@@ -41,6 +43,9 @@ from gyrocomp.pipeline.settings import (
     pipeline_settings,
     rate_settings,
 )
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "MODEL_SCHEMA",
