@@ -144,6 +144,8 @@ CONFIG_CASES = [
     ("unknown-table-in-file", ["train", "x.parquet", "--config", "bad.toml", "--out", "m.json"], r"bad\.toml: unknown table piepline"),
     ("allan-config-typo", ["allan", "x.parquet", "--config", "bad_allan.toml", "--out", "a.json"], r"bad_allan\.toml: unknown table alan"),
     ("decompose-config-typo", ["decompose", "x.parquet", "--config", "bad.toml", "--out", "c.parquet"], r"bad\.toml: unknown table piepline"),
+    ("diagnose-config-typo", ["diagnose", "x.parquet", "--config", "bad_diagnose.toml", "--out", "d.json"], r"bad_diagnose\.toml: unknown table diagnos; this config has \[diagnose\]"),
+    ("run-config-typo", ["run", "bad_run.toml", "x.parquet", "--out", "r"], r"bad_run\.toml: unknown table runn; this config has \[run\]"),
 ]
 
 
@@ -153,6 +155,8 @@ def test_config_typos_are_refused(tmp_path, monkeypatch, argv, message):
     _setup(tmp_path)
     (tmp_path / "bad.toml").write_text('[piepline]\nkind = "polynomial"\n')
     (tmp_path / "bad_allan.toml").write_text("[alan]\ntaus = \"octave\"\n")
+    (tmp_path / "bad_diagnose.toml").write_text("[diagnos]\ntau_grid_points = 8\n")
+    (tmp_path / "bad_run.toml").write_text("[runn]\nmethods = [\"polynomial\"]\n")
     monkeypatch.chdir(tmp_path)
     before = _snapshot(tmp_path)
     result = CliRunner().invoke(app, argv)
@@ -201,6 +205,8 @@ SETTING_CASES = [
     ("allan-rate-1e300", ["allan", "huge.csv", "--out", "a.json"], 2, r"huge\.csv line 7: `rate` = 1e\+300 deg/s is beyond \+-100000 deg/s"),
     ("allan-rate-minus-1e300-parquet", ["allan", "huge.parquet", "--out", "a.json"], 2, r"huge\.parquet row 6: `rate` = -1e\+300 deg/s is beyond"),
     ("train-rate-1e300", ["train", "huge.csv", "--config", "polynomial", "--out", "m.json"], 2, r"huge\.csv line 7: `rate` = 1e\+300 deg/s"),
+    ("diagnose-rate-1e300", ["diagnose", "huge.csv", "--out", "d.json"], 2, r"huge\.csv line 7: `rate` = 1e\+300 deg/s"),
+    ("compensate-rate-1e300", ["compensate", "huge.csv", "m.json", "--out", "c.parquet"], 2, r"huge\.csv line 7: `rate` = 1e\+300 deg/s"),
     ("allan-acceleration-beyond-bound", ["allan", "accel.csv", "--rate-unit", "g", "--out", "a.json"], 2, r"accel\.csv line 7: `rate` = 20000 g is beyond \+-10197\.2 g"),
     ("allan-metadata-deeply-nested", ["allan", "deep.parquet", "--out", "a.json"], 2, r"deep\.parquet: gyrocomp metadata: not valid JSON \(nested too deeply\)"),
     ("allan-metadata-not-utf8", ["allan", "latin.parquet", "--out", "a.json"], 2, r"latin\.parquet: gyrocomp metadata: not valid JSON"),
@@ -224,9 +230,10 @@ SETTING_CASES = [
 
 
 @pytest.mark.parametrize("argv, code, message", [c[1:] for c in SETTING_CASES], ids=[c[0] for c in SETTING_CASES])
-def test_bad_setting_is_refused(tmp_path, monkeypatch, argv, code, message):
+def test_bad_setting_is_refused(tmp_path, monkeypatch, trained_model, argv, code, message):
     """Every setting has a validated type and range; the error names the setting (issue 21 items 8, 9)."""
     _setup(tmp_path)
+    (tmp_path / "m.json").write_bytes(trained_model.read_bytes())
     _constant_recording(tmp_path / "const.csv")
     _huge_rate(tmp_path / "huge.csv", 1e300)
     _huge_rate(tmp_path / "huge.parquet", -1e300)

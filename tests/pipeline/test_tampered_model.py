@@ -131,6 +131,18 @@ def test_a_valid_model_still_compensates_to_finite_output(models, oven_pair):
         assert np.isfinite(frame["compensated"]).all()
 
 
+def test_a_tampered_decomposition_setting_is_refused_before_decomposing(models, oven_pair):
+    """``ensemble = 1e9`` in a parallel model's settings: full-mode compensate names it instead of running forever."""
+    from gyrocomp.pipeline.compensate import compensate
+
+    _, test, *_ = oven_pair
+    obj = copy.deepcopy(models["polynomial"])
+    obj["parallel"] = True
+    obj.setdefault("settings", {})["decompose"] = {"ensemble": 10**9}
+    with pytest.raises(InputError, match=r"model\.json settings\.decompose: ensemble = 1000000000; must be in 1\.\.10000"):
+        compensate(test, load_model(obj, name="model.json"), mode="full")
+
+
 def test_read_json_refuses_non_finite_constants(tmp_path):
     path = tmp_path / "x.json"
     path.write_text('{"a": [1.0, NaN]}')
