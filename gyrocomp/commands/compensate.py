@@ -192,8 +192,6 @@ def stream_to_files(
     """
     import warnings
 
-    import pandas as pd
-
     from gyrocomp import artefacts, streaming
     from gyrocomp.pipeline.compensate import COMPENSATION_SCHEMA, CausalCompensation, load_models
 
@@ -222,7 +220,7 @@ def stream_to_files(
                 for name in pairs:
                     columns[output_name(name, "compensated")] = results[name][1]
                     figures[name].add(columns[name], *results[name])
-                writer.write(pd.DataFrame(columns))
+                writer.write(columns)
                 if progress is not None:
                     progress(chunks.n_samples, None)
         summaries = {}
