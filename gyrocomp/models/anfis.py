@@ -377,9 +377,25 @@ def _normalised_firing(log_mu: list[np.ndarray]) -> np.ndarray:
 
 
 def _predict(Z: np.ndarray, premises: list[np.ndarray], consequents: np.ndarray, mf: str) -> np.ndarray:
-    wbar = _normalised_firing([_log_mu(p, Z[:, j], mf) for j, p in enumerate(premises)])
-    rule_out = Z @ consequents[:, :-1].T + consequents[:, -1]
-    return np.einsum("nr,nr->n", wbar, rule_out)
+    """sum_r wbar_r (c_r . z + c_r0) for each row of `Z` ([2] eq. (25)), by the compiled kernel.
+
+    The same output as ``_normalised_firing`` of ``_log_mu`` and the rule
+    outputs in NumPy, to rounding, without their (n, n_rules) temporaries
+    (:mod:`gyrocomp.models._anfis_compiled`).
+    """
+    from gyrocomp.models._anfis_compiled import forward
+
+    gbell = mf == "gbell"
+    stacked = np.concatenate(premises)
+    centre, width = (stacked[:, 2], stacked[:, 0]) if gbell else (stacked[:, 0], stacked[:, 1])
+    slope = stacked[:, 1] if gbell else np.zeros(len(stacked))
+    n_mfs = np.array([len(p) for p in premises], dtype=np.int64)
+    first = np.concatenate([[0], np.cumsum(n_mfs)[:-1]]).astype(np.int64)
+    Z = np.ascontiguousarray(Z, dtype=float)
+    return forward(
+        Z, np.ascontiguousarray(centre), np.ascontiguousarray(width), np.ascontiguousarray(slope), first, n_mfs,
+        np.ascontiguousarray(consequents, dtype=float), gbell, np.empty(len(Z)),
+    )
 
 
 def _premise_gradients(

@@ -100,6 +100,44 @@ def test_premise_gradient_matches_finite_differences(mf):
         assert_allclose(grads[j], numeric, rtol=1e-5, atol=1e-7)
 
 
+@pytest.mark.parametrize("mf", ["gbell", "gauss"])
+def test_compiled_forward_is_the_rule_grid_of_the_paper(mf):
+    """_predict (numba) against [2] eqs. (18), (23)-(25) written out rule by rule, 3 inputs with 3 x 2 x 4 MFs.
+
+    Inside the unit box against the plain products mu_1 mu_2 mu_3 / sum (1e-12);
+    far outside (memberships below 1e-300, where the plain products underflow)
+    against the log-domain NumPy path of training.
+    """
+    rng = np.random.default_rng(7)
+    n_mfs = (3, 2, 4)
+    premises = [anfis_module._initial_premises(m, mf) + rng.normal(0, 0.02, (m, 3 if mf == "gbell" else 2)) for m in n_mfs]
+    consequents = rng.normal(size=(24, 4))
+
+    def mu(p, x):
+        if mf == "gbell":
+            return 1.0 / (1.0 + np.abs((x - p[2]) / p[0]) ** (2 * p[1]))
+        return np.exp(-((x - p[0]) ** 2) / (2 * p[1] ** 2))
+
+    Z = rng.uniform(-0.5, 1.5, (200, 3))
+    expected = []
+    for z in Z:
+        w, f = [], []
+        for a in range(3):
+            for b in range(2):
+                for c in range(4):
+                    w.append(mu(premises[0][a], z[0]) * mu(premises[1][b], z[1]) * mu(premises[2][c], z[2]))
+                    f.append(consequents[len(f)] @ np.append(z, 1.0))
+        expected.append(np.dot(w, f) / np.sum(w))
+    assert_allclose(anfis_module._predict(Z, premises, consequents, mf), expected, rtol=1e-12, atol=1e-14)
+    beyond = rng.uniform(-1e100, 1e100, 200) if mf == "gbell" else rng.uniform(9.0, 11.0, 200)  # every mu of input 1 < exp(-600)
+    far = np.column_stack([beyond, rng.uniform(0, 1, 200), rng.uniform(-3.0, 3.0, 200)])
+    wbar = anfis_module._normalised_firing([anfis_module._log_mu(p, far[:, j], mf) for j, p in enumerate(premises)])
+    numpy_path = np.einsum("nr,nr->n", wbar, far @ consequents[:, :-1].T + consequents[:, -1])
+    got = anfis_module._predict(far, premises, consequents, mf)
+    assert np.isfinite(got).all()
+    assert_allclose(got, numpy_path, rtol=1e-12, atol=1e-12 * np.max(np.abs(numpy_path)))
+
+
 def test_jang_step_size_rules():
     """+10 % after four reductions in a row, -10 % after up-down-up-down, else unchanged."""
     update = anfis_module._update_step
