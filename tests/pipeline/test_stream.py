@@ -57,7 +57,7 @@ def chunks_of_97(monkeypatch):
 def test_chunks_give_the_bytes_of_the_whole_recording(key, models, test_csv, tmp_path, chunks_of_97):
     """A stream against the in-memory compensation of the whole recording, written at once."""
     whole = tmp_path / "whole.csv"
-    _, whole_summaries, _, _ = stage.to_files([test_csv, models[key]], whole)
+    _, whole_summaries, _ = stage.to_files([test_csv, models[key]], whole)
     for suffix in (".csv", ".parquet"):
         streamed = tmp_path / f"streamed{suffix}"
         n_samples, summaries, _ = stage.stream_to_files([test_csv, models[key]], streamed, rows=97)
