@@ -598,6 +598,7 @@ def recording_from_frame(
     limits: TimeLimits = TimeLimits(),
     _where: tuple[str, int] = ("row", 1),
     _owned: bool = False,
+    _gap_note: bool = True,
 ) -> Recording:
     """Validate an in-memory table as a recording (see :func:`read_recording`).
 
@@ -605,7 +606,9 @@ def recording_from_frame(
     integer or float NumPy array (validated without importing pandas).
     `sha256` defaults to the hash of the table's CSV form. Time and axes are
     copies (the private `_owned` says `frame` is a throw-away of
-    :func:`read_recording`, whose own columns are then reused).
+    :func:`read_recording`, whose own columns are then reused). The private
+    `_gap_note` false leaves the note on gaps out: a chunk of a file whose
+    reader reports the gaps of the whole file once (:mod:`gyrocomp.streaming`).
 
     The checks run in this order, each its own function: columns present
     (:func:`_select_columns`), cells numeric and finite and converted
@@ -660,7 +663,8 @@ def recording_from_frame(
     if columns.time_unit is None and origin is None:  # numbers read as seconds, not datetimes
         _check_time_base(out["time"], nominal, columns.time, name, limits)
     out, segments, filled = _segments(out, nominal, columns.time, locate, jitter_tolerance, resample, allow_gaps)
-    notes.extend(filled)
+    if _gap_note or len(segments) == 1:
+        notes.extend(filled)
     for note in notes:
         warnings.warn(f"{name}: {note}", RecordingNote, stacklevel=2)
     if sha256 is None:
@@ -1094,7 +1098,12 @@ def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, res
         )
     bounds = np.r_[0, long + 1, n]
     segments = [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
-    return out, segments, [f"{len(segments)} segments: {long.size} gaps, the longest {float(dt[long].max()):.6g} s (not interpolated)"]
+    return out, segments, [gap_note(long.size, float(dt[long].max()))]
+
+
+def gap_note(n_gaps: int, longest_s: float) -> str:
+    """The note on a recording's gaps: the segments, the gaps and the longest [s]."""
+    return f"{n_gaps + 1} segments: {n_gaps} gaps, the longest {longest_s:.6g} s (not interpolated)"
 
 
 def _resample(columns: dict[str, np.ndarray], interval: float) -> dict[str, np.ndarray]:

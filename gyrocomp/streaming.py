@@ -15,6 +15,9 @@ temperature and time base, strictly increasing time, no gap, jitter
 against the chunk's median interval), the errors naming the line or row
 in the whole file; across a chunk boundary the time must go on
 increasing, within the jitter tolerance of the first chunk's interval.
+A gap stops the reading (:class:`GapError`), or, with ``gaps=True``, is
+the start of a new segment (:attr:`ChunkReader.breaks`; one note on the
+file's gaps at the end of the first complete reading).
 The sample rate is the first chunk's (its median interval): what a stream
 can know when it starts. Time in seconds only (:func:`supports`): other
 units count from each chunk's first stamp.
@@ -25,13 +28,14 @@ from __future__ import annotations
 import hashlib
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import Callable, Iterator, Sequence
 
 import numpy as np
 
 from gyrocomp import artefacts, recordings
-from gyrocomp.errors import InputError
+from gyrocomp.errors import InputError, RecordingNote
 from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["CHUNK_ROWS", "GapError", "ChunkReader", "supports", "read_chunks", "TableWriter"]
@@ -56,16 +60,22 @@ class ChunkReader:
     metadata : dict
         The ``gyrocomp`` metadata of a Parquet file written by this tool.
     n_samples : int
-        Samples read so far.
+        Samples read so far in this reading.
+    breaks : list of int
+        With ``gaps``: the samples (counted from the start) after a gap, each
+        the first of a segment, found so far in this reading.
     """
 
-    def __init__(self, path, columns: ColumnSpec, *, rows: int, require_temperature: bool, usecols, jitter_tolerance: float):
+    def __init__(self, path, columns: ColumnSpec, *, rows: int, require_temperature: bool, usecols, jitter_tolerance: float, gaps: bool = False):
         self.name = "-" if str(path) == "-" else os.fspath(path)
         self.columns = columns
         self.rows = int(rows)
         self.require_temperature = require_temperature
         self.usecols = None if usecols is None else list(dict.fromkeys(usecols))
         self.jitter_tolerance = jitter_tolerance
+        self.gaps = bool(gaps)
+        self.breaks = []
+        self._noted = False
         self.fs_hz = None
         self.metadata = {}
         self.n_samples = 0
@@ -91,6 +101,8 @@ class ChunkReader:
         where, first = ("row", 1) if self._kind == "parquet" else ("line", 2)
         last_time = None
         nominal = None
+        longest = 0.0
+        self.n_samples, self.breaks = 0, []
         frames = self._csv_frames() if self._kind == "csv" else _exact_rows(self._parquet_frames(), self.rows)
         for frame in frames:
             chunk = recordings.recording_from_frame(
@@ -104,10 +116,15 @@ class ChunkReader:
                 allow_gaps=True,
                 _where=(where, first + self.n_samples),
                 _owned=True,
+                _gap_note=not self.gaps,
             )
             if len(chunk.segments) > 1:
-                row = first + self.n_samples + chunk.segments[1].start
-                raise GapError(f"{self.name} {where} {row}: a gap in `{self.columns.time}`; a streamed recording is one gap-free run")
+                if not self.gaps:
+                    row = first + self.n_samples + chunk.segments[1].start
+                    raise GapError(f"{self.name} {where} {row}: a gap in `{self.columns.time}`; a streamed recording is one gap-free run")
+                starts = np.array([seg.start for seg in chunk.segments[1:]])
+                self.breaks += (self.n_samples + starts).tolist()
+                longest = max(longest, float(np.max(chunk.time_s[starts] - chunk.time_s[starts - 1])))
             if chunk.time_origin is not None:
                 raise InputError(f"{self.name}: a streamed recording needs its time in seconds (--time-unit s)")
             time = chunk.time_s
@@ -117,8 +134,11 @@ class ChunkReader:
             else:
                 step = float(time[0]) - last_time
                 if step > nominal * (1 + self.jitter_tolerance):
-                    raise GapError(f"{self.name} {where} {first + self.n_samples}: a gap in `{self.columns.time}` after {last_time!r}; a streamed recording is one gap-free run")
-                if step <= 0 or abs(step - nominal) > self.jitter_tolerance * nominal:
+                    if not self.gaps:
+                        raise GapError(f"{self.name} {where} {first + self.n_samples}: a gap in `{self.columns.time}` after {last_time!r}; a streamed recording is one gap-free run")
+                    self.breaks.append(self.n_samples)
+                    longest = max(longest, step)
+                elif step <= 0 or abs(step - nominal) > self.jitter_tolerance * nominal:
                     raise InputError(
                         f"{self.name} {where} {first + self.n_samples}: `{self.columns.time}` = {float(time[0])!r} "
                         f"after {last_time!r}; a streamed recording needs strictly increasing time at the "
@@ -130,6 +150,9 @@ class ChunkReader:
         if self.n_samples == 0:
             raise InputError(f"{self.name}: has a header but no data rows")
         self._done = True
+        if self.breaks and not self._noted:  # the file's gaps, once however often it is read
+            warnings.warn(f"{self.name}: {recordings.gap_note(len(self.breaks), longest)}", RecordingNote, stacklevel=2)
+            self._noted = True
 
     def _csv_frames(self):
         import pandas as pd
@@ -213,6 +236,7 @@ def read_chunks(
     require_temperature: bool = False,
     usecols: Sequence[str] | None = None,
     jitter_tolerance: float = 0.5,
+    gaps: bool = False,
 ) -> ChunkReader:
     """A recording as an iterable of validated chunks of `rows` samples.
 
@@ -230,6 +254,10 @@ def read_chunks(
         File columns (names or globs) to read beside the time and the axes; default all.
     jitter_tolerance : float
         As in :func:`gyrocomp.recordings.read_recording`.
+    gaps : bool
+        Read on past a gap (a chunk may then hold several segments;
+        :attr:`ChunkReader.breaks` says where each starts) instead of
+        raising :class:`GapError`.
 
     Returns
     -------
@@ -239,7 +267,7 @@ def read_chunks(
     """
     if rows < 2:
         raise InputError(f"chunks of {rows} rows; need at least 2")
-    return ChunkReader(path, columns, rows=rows, require_temperature=require_temperature, usecols=usecols, jitter_tolerance=jitter_tolerance)
+    return ChunkReader(path, columns, rows=rows, require_temperature=require_temperature, usecols=usecols, jitter_tolerance=jitter_tolerance, gaps=gaps)
 
 
 class TableWriter:

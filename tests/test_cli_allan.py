@@ -89,3 +89,61 @@ def test_unknown_column_exits_2(white_csv, tmp_path):
     proc = _run(white_csv, "--rate-col", "w", "--time-col", "t_ms", "--time-unit", "ms", "--column", "compensated", "--out", tmp_path / "a.json")
     assert proc.returncode == 2
     assert "no column 'compensated'" in proc.stderr
+
+
+def _gapped_csv(path, sizes=(970, 700, 2, 500), fs=2.0):
+    """White noise in bursts separated by gaps of 100 s; returns the bursts' rates."""
+    rng = np.random.default_rng(9)
+    parts, start = [], 0.0
+    for n in sizes:
+        t = start + np.arange(n) / fs
+        parts.append(pd.DataFrame({"time": t, "rate": rng.normal(0.0, 0.01, n)}))
+        start = t[-1] + 100.0
+    pd.concat(parts, ignore_index=True).to_csv(path, index=False)
+    return [p["rate"].to_numpy() for p in parts]
+
+
+def test_a_gapped_file_read_in_chunks_gives_each_segment_as_read_whole(tmp_path):
+    """Chunks of 97 rows: one gap at a chunk boundary (after 970 rows), others inside chunks, a 2-sample burst."""
+    from gyrocomp import streaming
+    from gyrocomp.commands.allan import _pieces
+
+    path = tmp_path / "gapped.csv"
+    bursts = _gapped_csv(path)
+    reader = streaming.read_chunks(path, rows=97, gaps=True)
+    with pytest.warns(Warning, match="4 segments: 3 gaps, the longest 100 s") as notes:
+        found = al.analyse_segment_chunks(lambda: _pieces(reader, lambda c: c.rate_dps), lambda: reader.fs_hz, name="gapped.csv")
+    assert len(notes) == 1  # two readings, one note
+    assert reader.breaks == [970, 1670, 1672]
+    assert [s.name for s in found] == ["gapped.csv segment 1", "gapped.csv segment 2", "gapped.csv segment 4"]  # 2 samples: no deviation
+    for series, burst in zip(found, [bursts[0], bursts[1], bursts[3]]):
+        whole = al.analyse(burst, 2.0)
+        np.testing.assert_allclose(series.adev, whole.adev, rtol=1e-9)
+        np.testing.assert_array_equal(series.n, whole.n)
+    with pytest.raises(streaming.GapError):  # without gaps=True a gap still stops a stream
+        list(streaming.read_chunks(path, rows=97))
+
+
+def test_allan_reads_a_gapped_csv_as_a_gap_free_one_and_notes_once(tmp_path, monkeypatch):
+    """No whole-file read after the chunked one (the file is read as often as a gap-free file of its size) and one note."""
+    from gyrocomp import recordings, streaming
+
+    gapped, plain = tmp_path / "gapped.csv", tmp_path / "plain.csv"
+    _gapped_csv(gapped)
+    pd.DataFrame({"time": np.arange(2172) / 2.0, "rate": np.random.default_rng(1).normal(0, 0.01, 2172)}).to_csv(plain, index=False)
+
+    def whole(*args, **kwargs):
+        raise AssertionError("read whole")
+
+    monkeypatch.setattr(recordings, "read_recording", whole)
+    monkeypatch.setattr(recordings, "read_recordings", whole)
+    opened = []
+    frames = streaming.ChunkReader._csv_frames
+    monkeypatch.setattr(streaming.ChunkReader, "_csv_frames", lambda self: (opened.append(self.name), frames(self))[1])
+    result = CliRunner().invoke(app, ["allan", str(gapped), "--out", str(tmp_path / "a.json")])
+    assert result.exit_code == 0, result.output
+    assert result.stderr.count("segments:") == 1 and "4 segments: 3 gaps, the longest 100 s (not interpolated)" in result.stderr
+    reads = len(opened)
+    opened.clear()
+    assert CliRunner().invoke(app, ["allan", str(plain), "--out", str(tmp_path / "b.json")]).exit_code == 0
+    assert reads == len(opened) == 3  # the first chunk for the columns, then the mean and the phase

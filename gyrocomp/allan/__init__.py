@@ -17,6 +17,7 @@ from gyrocomp.allan.analysis import (
     allan_artefact,
     analyse,
     analyse_chunks,
+    analyse_segment_chunks,
     check_thresholds,
     get_config,
 )
@@ -29,6 +30,7 @@ __all__ = [
     "oadev",
     "analyse",
     "analyse_chunks",
+    "analyse_segment_chunks",
     "allan_artefact",
     "check_thresholds",
 ]

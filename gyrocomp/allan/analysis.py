@@ -12,6 +12,7 @@ read-offs (:mod:`gyrocomp.allan.fit`, model in
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import os
 from typing import Callable, Iterable, Sequence
@@ -29,6 +30,7 @@ __all__ = [
     "get_config",
     "analyse",
     "analyse_chunks",
+    "analyse_segment_chunks",
     "allan_artefact",
     "check_thresholds",
 ]
@@ -249,24 +251,71 @@ def analyse_chunks(
     2.4 GB phase file, which the operating system's page cache, not the
     process, holds.
     """
-    total, n_samples = 0.0, 0
-    for y in chunks():
+    (series,) = analyse_segment_chunks(
+        lambda: ((0, y) for y in chunks()), fs_hz, taus=taus, name=name, column=column, settings=settings, folder=folder
+    )
+    return series
+
+
+def analyse_segment_chunks(
+    pieces: Callable[[], Iterable[tuple[int, np.ndarray]]],
+    fs_hz: Callable[[], float] | float,
+    *,
+    taus=None,
+    name: str = "",
+    column: str = "rate",
+    settings: AllanConfig = AllanConfig(),
+    folder: str | None = None,
+) -> list[AllanSeries]:
+    """:func:`analyse_chunks` of a series with gaps: each gap-free segment a series of its own, in two readings.
+
+    Parameters
+    ----------
+    pieces : callable returning an iterable of (int, ndarray)
+        Each call reads the series again from its start, as consecutive
+        pieces ``(segment, samples)`` [deg/s]: the segment's index (0, 1,
+        ...; increasing, a segment's pieces together) and samples of that
+        segment alone, so that no piece spans a gap. Called twice.
+    fs_hz, taus, column, settings, folder
+        As :func:`analyse_chunks`.
+    name : str
+        The series' name; with several segments, ``<name> segment <k>`` (k from 1).
+
+    Returns
+    -------
+    list of AllanSeries
+        One per segment, each equal to :func:`analyse` of that segment to
+        rounding; with several segments, those of fewer than 3 samples are
+        left out (no deviation), as the whole-file reading leaves them out.
+    """
+    sums: dict[int, list] = {}
+    seen = 0
+    for k, y in pieces():
         y = np.asarray(y, dtype=float)
         part = float(y.sum())
         if not math.isfinite(part):
             i = int(np.flatnonzero(~np.isfinite(y))[0])
-            raise InputError(f"rate sample {n_samples + i} is {y[i]!r}; the Allan deviation needs finite values")
-        total += part
-        n_samples += len(y)
-    if n_samples < 3:
-        raise InputError(f"Allan deviation needs at least 3 samples, got {n_samples}")
+            raise InputError(f"rate sample {seen + i} is {y[i]!r}; the Allan deviation needs finite values")
+        entry = sums.setdefault(k, [0.0, 0])
+        entry[0] += part
+        entry[1] += len(y)
+        seen += len(y)
+    if len(sums) <= 1 and seen < 3:
+        raise InputError(f"Allan deviation needs at least 3 samples, got {seen}")
     fs_hz = check_fs(fs_hz() if callable(fs_hz) else fs_hz)
-    in_memory = n_samples <= settings.max_phase_in_memory
-    phase = integrate(chunks(), total / n_samples, n_samples, in_memory=in_memory, folder=folder)
-    try:
-        return _series(phase, fs_hz, taus, name, column, settings)
-    finally:
-        phase.close()
+    out = []
+    for k, group in itertools.groupby(pieces(), key=lambda piece: piece[0]):
+        total, n_samples = sums[k]
+        if n_samples < 3:  # only with several segments (checked above)
+            continue
+        label = name if len(sums) == 1 else f"{name} segment {k + 1}"
+        values = (y for _, y in group)
+        phase = integrate(values, total / n_samples, n_samples, in_memory=n_samples <= settings.max_phase_in_memory, folder=folder)
+        try:
+            out.append(_series(phase, fs_hz, taus, label, column, settings))
+        finally:
+            phase.close()
+    return out
 
 
 def _series(phase: Phase, fs_hz: float, taus, name: str, column: str, settings: AllanConfig) -> AllanSeries:

@@ -6,7 +6,7 @@ import dataclasses
 import math
 import os
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Iterator, Optional, Sequence
 
 from gyrocomp.commands import guarded
 from gyrocomp.errors import InputError
@@ -68,15 +68,16 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     each of its axes (or ``options.column``) analysed
     (:func:`gyrocomp.allan.analyse`) as one series named after the file,
     or, for a CSV or Parquet file, read chunk by chunk, twice per series
-    (:func:`gyrocomp.streaming.read_chunks`, :func:`gyrocomp.allan.analyse_chunks`),
+    (:func:`gyrocomp.streaming.read_chunks`, :func:`gyrocomp.allan.analyse_segment_chunks`),
     so that a recording bigger than memory is fine (standard input, flight
     logs, time units other than seconds and `resample` read it whole);
     the streams of a flight log that the columns select are analysed each
     on its own time stamps (:func:`gyrocomp.recordings.read_recordings`);
-    a recording with gaps is read whole and each of its segments analysed
-    as a series of its own (``<file> segment <k>``: an Allan deviation
-    never spans a gap, nothing is interpolated), segments too short for
-    the first tau left out; its ``column`` the axis' name, and every series written to `out` (``-``
+    each segment of a recording with gaps is analysed as a series of its
+    own (``<file> segment <k>``: an Allan deviation never spans a gap,
+    nothing is interpolated; a file read in chunks is not read again for
+    it, and its gaps are noted once), segments of fewer than 3 samples
+    left out; its ``column`` the axis' name, and every series written to `out` (``-``
     is stdout) as :func:`gyrocomp.allan.allan_artefact` and drawn in one
     plot. The bounds are left to :func:`check`, so that the artefacts exist
     when one is crossed.
@@ -104,16 +105,11 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     for path in inputs:
         usecols = [] if column == "rate" else [column]
         if str(path) != "-" and not options.resample and streaming.supports(path, options.columns):
-            try:
-                one_path = _streamed(path, options, settings, usecols)
-            except streaming.GapError:
-                one_path = None  # a file with gaps: read whole, one series per segment
-            if one_path is not None:
-                found, record, found_units = one_path
-                series += found
-                units += found_units
-                records.append(record)
-                continue
+            found, record, found_units = _streamed(path, options, settings, usecols)
+            series += found
+            units += found_units
+            records.append(record)
+            continue
         streams = recordings.read_recordings(
             path, options.columns, min_samples=3, resample=options.resample, usecols=usecols, allow_gaps=not options.resample
         )
@@ -146,17 +142,19 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
 
 
 def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, dict, list]:
-    """The series of a CSV or Parquet file read chunk by chunk (:func:`gyrocomp.allan.analyse_chunks`).
+    """The series of a CSV or Parquet file read chunk by chunk (:func:`gyrocomp.allan.analyse_segment_chunks`).
 
-    Raises :class:`gyrocomp.streaming.GapError` before any series is made
-    when the file has a gap (the first pass reads it whole).
+    A file with gaps is read the same way: each gap-free segment is a
+    series of its own (``<file> segment <k>``), the pieces of a chunk cut
+    at the gaps the reader finds (:attr:`gyrocomp.streaming.ChunkReader.breaks`),
+    and the reader notes the gaps once.
     """
     from gyrocomp import allan as al
     from gyrocomp import streaming
     from gyrocomp.errors import InputError
 
     column = options.column
-    reader = streaming.read_chunks(path, options.columns, usecols=usecols)
+    reader = streaming.read_chunks(path, options.columns, usecols=usecols, gaps=True)
     head = next(iter(reader))  # the axes and columns, from the first chunk
     if column == "rate":
         values = {axis.name: ((lambda chunk, name=axis.name: chunk.axis(name).rate_dps), axis.unit) for axis in head.axes}
@@ -166,14 +164,28 @@ def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, di
         raise InputError(f"{head.name}: no column {column!r} to analyse; it has {', '.join(head.columns)}")
     series, units = [], []
     for name, (pick, unit) in values.items():
-        one = al.analyse_chunks(
-            lambda: (pick(chunk) for chunk in reader), lambda: reader.fs_hz,
+        found = al.analyse_segment_chunks(
+            lambda: _pieces(reader, pick), lambda: reader.fs_hz,
             taus=options.taus, name=Path(reader.name).name, column=name, settings=settings,
         )
-        _relabel(one, unit)
-        series.append(one)
-        units.append(unit)
+        for one in found:
+            _relabel(one, unit)
+            series.append(one)
+            units.append(unit)
     return series, reader.input_record(), units
+
+
+def _pieces(reader, pick) -> Iterator[tuple[int, "np.ndarray"]]:
+    """``(segment, samples)`` of each chunk of `reader`, cut at its gaps: what :func:`gyrocomp.allan.analyse_segment_chunks` reads."""
+    import bisect
+
+    for chunk in reader:
+        y = pick(chunk)
+        stop = reader.n_samples
+        start = stop - len(y)
+        edges = [start, *(b for b in reader.breaks if start < b < stop), stop]
+        for a, b in zip(edges[:-1], edges[1:]):
+            yield bisect.bisect_right(reader.breaks, a), y[a - start : b - start]
 
 
 def _input_record(streams: Sequence) -> dict:
