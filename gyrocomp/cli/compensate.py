@@ -54,7 +54,10 @@ def compensate(
     several axes (--rate-col gx,gy,gz) each axis, temperature,
     <axis>_drift_model and <axis>_compensated, each axis compensated by the
     model of its name. A recording with gaps is compensated segment by
-    segment (dT/dt never spans a gap; causal mode, or a direct pipeline).
+    segment (dT/dt never spans a gap; full mode of a decomposition pipeline
+    decomposes each segment on its own). Gyro and accelerometer topics of a
+    ULog (their own time stamps) are written to one table each,
+    OUT_<topic>_<instance>.
     Warns (on stderr) when the recording leaves the model's training
     temperature or dT/dt range, and by how much; causal mode clamps both
     to those ranges unless --no-clamp. A foreign, corrupted or newer

@@ -60,7 +60,8 @@ def train(
     window_s. model.json holds every setting and learned number compensate needs,
     for every axis of --rate-col (gx,gy,gz or a glob: one model per axis, under
     its column's name). A recording with gaps trains on every sample of every
-    segment; dT/dt never spans a gap.
+    segment; dT/dt never spans a gap, and a decomposition pipeline
+    decomposes each segment on its own.
     """
     with report_errors(ctx):
         from gyrocomp.commands import from_params, train as stage
