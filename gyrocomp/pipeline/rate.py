@@ -80,6 +80,8 @@ from gyrocomp.pipeline.settings import RateSettings
 __all__ = [
     "CausalRate",
     "temperature_rate",
+    "CentredRate",
+    "check_temperature",
     "model_inputs",
     "window_samples",
     "causal_coefficients",
@@ -127,7 +129,7 @@ class CausalRate:
 
     def __call__(self, temperature_c) -> np.ndarray:
         """Rate [degC/s] at each reading of the chunk, from it and the readings before."""
-        temperature = _check_temperature(temperature_c, minimum=1)
+        temperature = check_temperature(temperature_c, minimum=1)
         w = self.window
         if self._history is None:
             self._history = np.full(w - 1, temperature[0])
@@ -175,22 +177,54 @@ def temperature_rate(
     >>> bool(np.allclose(rate[30:-30], 0.01, atol=1e-3))
     True
     """
-    temperature = _check_temperature(temperature_c, minimum=2)
+    temperature = check_temperature(temperature_c, minimum=2)
     if causal:
         return CausalRate(settings, fs_hz, temperature.size)(temperature)
-    n = window_samples(settings, fs_hz, temperature.size)
-    order = min(settings.polyorder, n - 1)
-    half = n // 2
-    out = np.empty(temperature.size)
-    out[half : temperature.size - half] = _windowed(temperature, n, moment_weights(n, order, fs_hz, half))
-    for window, positions, target in (
-        (temperature[:n], np.arange(half), slice(0, half)),
-        (temperature[-n:], np.arange(half + 1, n), slice(temperature.size - half, None)),
-    ):
+    return CentredRate(temperature, fs_hz, settings).rows(0, temperature.size)
+
+
+class CentredRate:
+    """The centred estimate of :func:`temperature_rate` over a series, taken a run of samples at a time, bit for bit.
+
+    The moment sums are laid out in rows of W counted from the series'
+    start (:func:`_windowed`), and :meth:`rows` sums exactly the rows that
+    cover the samples asked for, as for the whole series; so a long
+    recording can be taken a run at a time, with temporaries of the run's
+    size (training on block means, :func:`gyrocomp.pipeline.train`).
+
+    Parameters
+    ----------
+    temperature : ndarray, shape (n_samples,)
+        The whole series [degC] (checked by :func:`check_temperature`).
+    fs_hz : float
+    settings : RateSettings
+    """
+
+    def __init__(self, temperature: np.ndarray, fs_hz: float, settings: RateSettings):
+        self.temperature = temperature
+        self.window = window_samples(settings, fs_hz, temperature.size)
+        order = min(settings.polyorder, self.window - 1)
+        self.weights = moment_weights(self.window, order, fs_hz, self.window // 2)
         # the edges: the derivative of the fit to the first (last) window, as savgol_filter(mode="interp")
-        coefficients = np.polyder(np.polyfit(np.arange(n), window, order))
-        out[target] = np.polyval(coefficients, positions) * fs_hz
-    return out
+        self.edges = [np.polyder(np.polyfit(np.arange(self.window), w, order)) * fs_hz for w in (temperature[: self.window], temperature[-self.window :])]
+
+    def rows(self, start: int, stop: int) -> np.ndarray:
+        """Rate [degC/s] at samples ``start .. stop - 1`` (``0 <= start < stop <= n_samples``)."""
+        size, n = self.temperature.size, self.window
+        half = n // 2
+        out = np.empty(stop - start)
+        lo, hi = max(start, half), min(stop, size - half)
+        if hi > lo:  # output o reads temperature[o : o + n] and sits at sample o + half
+            first_row = (lo - half) // n * n
+            rates = _windowed(self.temperature[first_row : hi - half + n - 1], n, self.weights)
+            out[lo - start : hi - start] = rates[lo - half - first_row :]
+        for coefficients, samples, origin in (
+            (self.edges[0], np.arange(start, min(stop, half)), 0),
+            (self.edges[1], np.arange(max(start, size - half), stop), size - n),
+        ):
+            if samples.size:
+                out[samples - start] = np.polyval(coefficients, samples - origin)
+        return out
 
 
 def model_inputs(temperature_c, fs_hz: float, settings: RateSettings = RateSettings(), *, causal: bool = False) -> np.ndarray:
@@ -329,7 +363,8 @@ def check_described(stored: dict, settings: RateSettings, name: str, rtol: float
             )
 
 
-def _check_temperature(temperature_c, minimum: int) -> np.ndarray:
+def check_temperature(temperature_c, minimum: int) -> np.ndarray:
+    """`temperature_c` as a finite 1-D float array of at least `minimum` samples (else InputError)."""
     temperature = np.asarray(temperature_c, dtype=float)
     if temperature.ndim != 1 or temperature.size < minimum:
         raise InputError(f"temperature: expected a 1-D series of at least {minimum} samples, got shape {temperature.shape}")

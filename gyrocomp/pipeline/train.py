@@ -30,7 +30,8 @@ divided by its standard deviation. Both maps are stored per segment in
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import math
+from typing import TYPE_CHECKING, Iterator
 
 import numpy as np
 
@@ -66,6 +67,8 @@ MODEL_VERSION = "2.0"
 _HEADER_KEYS = ("schema", "gyrocomp_version", "inputs", "settings", "seed")
 INPUTS = ("temperature_c", "temperature_rate_c_per_s")
 """Names of the learners' input columns, in order."""
+TRAIN_ROWS = 1 << 16
+"""Samples whose inputs training computes at once (whole blocks of the block means)."""
 
 
 def train_direct(recording: recordings.Recording, config: dict, *, source: str = "config", seed: int | None = 0, bounds=None) -> dict:
@@ -451,40 +454,76 @@ def axis_models(obj: dict, name: str = "model.json") -> dict:
 
 
 def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, inputs, extra, bounds=None) -> dict:
+    """Fit each segment's learner on block means of (T, dT/dt) and its target, in bounded memory.
+
+    The inputs are computed a run of whole blocks at a time (:func:`_runs`,
+    :func:`_inputs_of`), three times: for their ranges, the block means and
+    the training RMSE. Beside the recording's own columns, memory holds one
+    run's inputs and the block means (at most ``max_samples`` a segment),
+    whatever the recording's length; the figures equal those of the whole
+    arrays at once bit for bit on a recording of one run.
+    """
     rate_cfg = rate_settings(config, source)
     pipeline = pipeline_settings(config, source)
     model_table = model_settings(config, source, parallel=pipeline.parallel)
-    duration = len(temperature) / fs_hz
+    temperature = np.asarray(temperature, dtype=float)
+    n = len(temperature)
+    duration = n / fs_hz
     if rate_cfg.window_s > duration:
         raise InputError(
             f"{', '.join(record['name'] for record in inputs) or source}: [rate] window_s = {rate_cfg.window_s:g} s "
             f"is longer than the recording ({duration:g} s); the temperature rate needs a window within it"
         )
-    X = segment_inputs(temperature, fs_hz, rate_cfg, bounds)
-    lo, hi = X.min(axis=0), X.max(axis=0)
+    ranges = [(0, n)] if bounds is None else [b.indices(n)[:2] for b in bounds]
+    for lo, hi in ranges:
+        rate_estimator.check_temperature(temperature[lo:hi], minimum=2)
+    size = 1 if model_table.max_samples == 0 or n <= model_table.max_samples else -(-n // model_table.max_samples)
+    runs = _runs(ranges, np.concatenate([np.arange(lo, hi, size) for lo, hi in ranges]), TRAIN_ROWS)
+
+    def input_runs():
+        return _inputs_of(temperature, fs_hz, rate_cfg, runs)
+
+    extremes = [(X.min(axis=0), X.max(axis=0)) for _, X, _ in input_runs()]
+    lo, hi = np.min([e[0] for e in extremes], axis=0), np.max([e[1] for e in extremes], axis=0)
     _check_rank(lo, hi, model_table, ", ".join(record["name"] for record in inputs) or source)
-    fitted = {}
+    maps = {}
     for segment, y in targets.items():
         spec = model_table.segments[segment]
         if spec.normalise_inputs:
             offset, scale = (hi + lo) / 2, np.where(hi > lo, (hi - lo) / 2, 1.0)
         else:
-            offset, scale = np.zeros(X.shape[1]), np.ones(X.shape[1])
-        Xn = (X - offset) / scale
+            offset, scale = np.zeros(2), np.ones(2)
+        y = np.asarray(y, dtype=float)
         y_offset = float(np.mean(y))
-        y_scale = float(np.std(y)) or 1.0
-        Xb, yb = _block_means(Xn, (y - y_offset) / y_scale, model_table.max_samples, bounds)
-        learner = spec.build(seed).fit(Xb, yb)
-        prediction = learner.predict(Xn) * y_scale + y_offset
+        y_scale = math.sqrt(sum(float(np.sum((y[run[0] : run[1]] - y_offset) ** 2)) for run in runs) / n) or 1.0
+        maps[segment] = (y, offset, scale, y_offset, y_scale)
+    means = {segment: ([], []) for segment in targets}
+    for rows, X, local_starts in input_runs():
+        counts = np.diff(np.append(local_starts, len(X)))
+        for segment, (y, offset, scale, y_offset, y_scale) in maps.items():
+            means[segment][0].append(np.add.reduceat((X - offset) / scale, local_starts, axis=0) / counts[:, None])
+            means[segment][1].append(np.add.reduceat((y[rows] - y_offset) / y_scale, local_starts) / counts)
+    learners = {}
+    for segment, (y, offset, scale, y_offset, y_scale) in maps.items():
+        Xb, yb = np.concatenate(means[segment][0]), np.concatenate(means[segment][1])
+        learners[segment] = (model_table.segments[segment].build(seed).fit(Xb, yb), float(np.min(yb)), float(np.max(yb)))
+    squares = dict.fromkeys(targets, 0.0)
+    for rows, X, _ in input_runs():
+        for segment, (y, offset, scale, y_offset, y_scale) in maps.items():
+            error = learners[segment][0].predict((X - offset) / scale) * y_scale + y_offset - y[rows]
+            squares[segment] += float(np.sum(error**2))
+    fitted = {}
+    for segment, (y, offset, scale, y_offset, y_scale) in maps.items():
+        learner, low, high = learners[segment]
         fitted[segment] = {
             **extra["segments"][segment],
             "input_offset": offset.tolist(),
             "input_scale": scale.tolist(),
             "output_offset": y_offset,
             "output_scale": y_scale,
-            "output_min": float(np.min(yb) * y_scale + y_offset),
-            "output_max": float(np.max(yb) * y_scale + y_offset),
-            "train_rmse_dps": float(np.sqrt(np.mean((prediction - y) ** 2))),
+            "output_min": low * y_scale + y_offset,
+            "output_max": high * y_scale + y_offset,
+            "train_rmse_dps": math.sqrt(squares[segment] / n),
             "learner": learner.to_dict(),
         }
     settings = {**settings, "rate": settings_dict(rate_cfg), "model": model_table.to_dict()}
@@ -506,8 +545,8 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
         "training": {
             "temperature_c": {"min": float(lo[0]), "max": float(hi[0])},
             "temperature_rate_c_per_s": {"min": float(lo[1]), "max": float(hi[1])},
-            "n_samples": int(X.shape[0]),
-            "duration_s": float(X.shape[0] / fs_hz),
+            "n_samples": n,
+            "duration_s": float(n / fs_hz),
             "n_segments": 1 if bounds is None else len(bounds),
         },
     }
@@ -532,22 +571,35 @@ def _check_rank(lo: np.ndarray, hi: np.ndarray, model_table, name: str) -> None:
             )
 
 
-def _block_means(X: np.ndarray, y: np.ndarray, max_samples: int, bounds=None) -> tuple[np.ndarray, np.ndarray]:
-    """Means of consecutive blocks of ceil(n / max_samples) samples within each gap-free range of `bounds`.
+def _runs(ranges: list, starts: np.ndarray, rows: int) -> list:
+    """Runs of whole blocks, about `rows` samples each, within each gap-free range.
 
-    A block never spans a gap: each range starts a block, and its partial
-    last block is kept. `bounds` ``None`` is one range.
+    Returns
+    -------
+    list of (first, stop, range_lo, range_hi, block_starts)
+        Samples ``first .. stop - 1`` of the range ``range_lo .. range_hi - 1``,
+        and the first samples of the run's blocks counted from `first`
+        (`starts`: every block of every range, :func:`_fit`), so a block
+        never spans a gap or two runs.
     """
-    n = len(y)
-    if max_samples == 0 or n <= max_samples:
-        return X, y
-    k = -(-n // max_samples)
-    ranges = [(0, n)] if bounds is None else [b.indices(n)[:2] for b in bounds]
-    starts = np.concatenate([np.arange(lo, hi, k) for lo, hi in ranges])
-    counts = np.diff(np.append(starts, n))
-    Xb = np.add.reduceat(X, starts, axis=0) / counts[:, None]
-    yb = np.add.reduceat(y, starts) / counts
-    return Xb, yb
+    runs = []
+    for lo, hi in ranges:
+        first = starts[(starts >= lo) & (starts < hi)]
+        step = max(1, rows // (int(first[1] - first[0]) if len(first) > 1 else hi - lo))
+        for k in range(0, len(first), step):
+            stop = int(first[k + step]) if k + step < len(first) else hi
+            runs.append((int(first[k]), stop, lo, hi, first[k : k + step] - first[k]))
+    return runs
+
+
+def _inputs_of(temperature: np.ndarray, fs_hz: float, settings, runs: list) -> Iterator[tuple]:
+    """(rows, X, block starts) of each run: X = [T, centred dT/dt] of its samples, the rate of its range's whole series, bit for bit."""
+    estimators = {}
+    for first, stop, lo, hi, block_starts in runs:
+        if (lo, hi) not in estimators:
+            estimators = {(lo, hi): rate_estimator.CentredRate(temperature[lo:hi], fs_hz, settings)}
+        rate = estimators[(lo, hi)].rows(first - lo, stop - lo)
+        yield slice(first, stop), np.column_stack([temperature[first:stop], rate]), block_starts
 
 
 def _component_names(frame, header: dict) -> list[str]:

@@ -122,12 +122,39 @@ def test_out_of_range_recording_warns_by_how_much(make_recording, trained):
 
 
 def test_block_means_never_span_a_gap():
-    """Training on block means (``[model] max_samples``): each gap-free range starts a block of its own."""
-    from gyrocomp.pipeline.train import _block_means
+    """Training on block means (``[model] max_samples``): each gap-free range starts a block, runs hold whole blocks."""
+    from gyrocomp.pipeline.train import _runs
 
-    X = np.arange(24.0).reshape(12, 2)
-    y = np.arange(12.0)
-    Xb, yb = _block_means(X, y, 4, [slice(0, 5), slice(5, 12)])  # blocks of ceil(12 / 4) = 3 samples
-    assert_array_equal(yb, [1.0, 3.5, 6.0, 9.0, 11.0])  # rows 0-2, 3-4 | 5-7, 8-10, 11
-    assert_array_equal(Xb[:, 0], 2 * yb)
-    assert_array_equal(_block_means(X, y, 4)[1], [1.0, 4.0, 7.0, 10.0])
+    ranges = [(0, 5), (5, 12)]
+    starts = np.array([0, 3, 5, 8, 11])  # blocks of ceil(12 / 4) = 3 samples: rows 0-2, 3-4 | 5-7, 8-10, 11
+    runs = _runs(ranges, starts, rows=6)
+    assert [(first, stop) for first, stop, *_ in runs] == [(0, 5), (5, 11), (11, 12)]
+    assert [(lo, hi) for _, _, lo, hi, _ in runs] == [(0, 5), (5, 12), (5, 12)]
+    assert [list(local) for *_, local in runs] == [[0, 3], [0, 3], [0]]
+    assert [(first, stop) for first, stop, *_ in _runs([(0, 12)], np.arange(12), rows=1 << 16)] == [(0, 12)]
+
+
+
+
+@pytest.mark.parametrize("name", ["polynomial", "elm"])
+def test_training_run_by_run_equals_the_whole_arrays(name, oven_pair, monkeypatch):
+    """Inputs computed 50 samples at a time (many runs) give the model of one run (all samples at once) to 1e-12."""
+    import gyrocomp.pipeline.train as train_module
+
+    train, *_ = oven_pair
+    whole = train_direct(train, load_config(name), source=name, seed=0)
+    monkeypatch.setattr(train_module, "TRAIN_ROWS", 50)
+    runs = train_direct(train, load_config(name), source=name, seed=0)
+    whole_numbers, run_numbers = _numbers(whole), _numbers(runs)
+    assert whole_numbers.keys() == run_numbers.keys()
+    for key, value in whole_numbers.items():
+        assert run_numbers[key] == pytest.approx(value, rel=1e-12, abs=1e-300), key
+
+
+def _numbers(obj, path=""):
+    """Every number of a JSON-like object by its path."""
+    if isinstance(obj, dict):
+        return {k: v for key, value in obj.items() for k, v in _numbers(value, f"{path}/{key}").items()}
+    if isinstance(obj, list):
+        return {k: v for i, value in enumerate(obj) for k, v in _numbers(value, f"{path}[{i}]").items()}
+    return {path: obj} if isinstance(obj, (int, float)) and not isinstance(obj, bool) else {}
