@@ -21,6 +21,9 @@ whole process (``python -m gyrocomp ...``), peak resident memory from
     ``allan`` on 3e8 samples (1 kHz, 83 h, Parquet) under 1 GB, against
     :func:`gyrocomp.allan.analyse` of the whole array in memory (relative
     difference of every deviation). The file is deleted afterwards.
+``train``
+    Peak memory of ``train`` (polynomial, ELM) on the 1x and the 10x
+    recording, and the size of the extra input columns.
 ``rate``
     The O(1) dT/dt against the direct FIR (``np.convolve``) on 10 min at
     1 kHz, and its rounding after 10^8 samples of a stream against the exact
@@ -30,6 +33,7 @@ whole process (``python -m gyrocomp ...``), peak resident memory from
 from __future__ import annotations
 
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -240,6 +244,20 @@ def part_big() -> dict:
     }
 
 
+def part_train() -> dict:
+    """Peak memory of ``train`` (polynomial, and ELM) on 12 min and on 2 h at 1 kHz, against the extra input columns."""
+    short, long = oven(DATA / "oven_12min_1khz.parquet", 720.0), oven(DATA / "oven_2h_1khz.parquet", 7200.0)
+    extra_mb = 3 * 8 * (7_200_000 - 720_000) / 2**20  # time, rate, temperature
+    out = {"extra_input_columns_mb": extra_mb}
+    for config in ("polynomial", "elm"):
+        runs = [timed(gyrocomp("train", f, "-c", config, "--out", DATA / f"t_{config}.json")) for f in (short, long)]
+        out[config] = {
+            "peak_1x_mb": runs[0][2], "peak_10x_mb": runs[1][2], "ratio_10x_1x": runs[1][2] / runs[0][2],
+            "bound_mb": 1.3 * runs[0][2] + extra_mb, "wall_1x_s": runs[0][0], "wall_10x_s": runs[1][0],
+        }
+    return out
+
+
 def part_rate() -> dict:
     sys.path.insert(0, str(ROOT))
     from gyrocomp.pipeline.rate import CausalRate, causal_coefficients, temperature_rate
@@ -282,13 +300,17 @@ def part_rate() -> dict:
 
 
 def main(parts: list[str]) -> int:
-    known = {"rate": part_rate, "compensate": part_compensate, "memory": part_memory, "stream": part_stream, "allantools": part_allantools, "big": part_big}
-    results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+    known = {
+        "rate": part_rate, "compensate": part_compensate, "memory": part_memory, "stream": part_stream,
+        "allantools": part_allantools, "big": part_big, "train": part_train,
+    }
     for name in parts or ["rate", "compensate", "memory", "stream"]:
         print(f"-- {name}", flush=True)
-        results[name] = known[name]()
-        for key, value in results[name].items():
-            print(f"{key}: {value}")
+        found = {"load_average_1min_at_start": os.getloadavg()[0], **known[name]()}
+        for key, value in found.items():
+            print(f"{key}: {value}", flush=True)
+        results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}  # read late: parts may run side by side
+        results[name] = found
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(results, indent=2) + "\n")
     return 0
