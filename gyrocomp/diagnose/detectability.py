@@ -251,5 +251,5 @@ def detection_limit(runs, model, effect, shape, bic_margin, power=0.95):
         return {"tau_s": {"value": float(np.exp(z)), "unit": "s"}}
     columns, _ = effect_columns(fit.run, effect, shape, fit.poly_degree, fit.scale)
     # A sinusoid's evidence depends on its phase: the mean over phases is that of sin and cos averaged.
-    unit = np.mean([deterministic_evidence(fit, c, spec, noise) for c in columns.T])
+    unit = np.mean([deterministic_evidence(fit, c, spec, noise) for c in columns.T[: KINDS[effect].unit_columns]])
     return KINDS[effect].amplitude(float(np.sqrt(target / unit)))

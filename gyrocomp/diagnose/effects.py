@@ -11,8 +11,8 @@ effect          columns                                     nonlinear parameter 
 ==============  ==========================================  ======================  ==========
 baseline        1, T~, T~^2, T~^3 (T~ scaled temperature)   --                      --
 thermal_lag     the polynomial in the element temperature    ``tau_s`` (grid)        follows a lagged T: transients that decay with tau after a step
-temp_rate       dT/dt                                       --                      proportional to dT/dt, zero in a soak
-hysteresis      heating/cooling branch (+1/-1)              ``deadband_c`` (grid)   offset by last direction, kept through a soak
+temp_rate       dT/dt, |dT/dt| (heating and cooling apart)  --                      proportional to dT/dt, zero in a soak
+hysteresis      heating/cooling branch (+1/-1), power-on    ``deadband_c`` (grid)   offset by last direction, kept through a soak
 warmup          exp(-(t - t0) / tau)                        ``tau_s`` (grid)        one decay from power-on
 rate_ramp       t - t0                                      --                      straight line in time
 periodic        sin, cos (2 pi t / P)                       ``period_s`` (grid)     fixed period, unrelated to T
@@ -20,7 +20,9 @@ periodic        sin, cos (2 pi t / P)                       ``period_s`` (grid) 
 
 The stochastic effects (``bias_instability``, ``rate_random_walk``) are
 terms of the noise covariance (:mod:`gyrocomp.diagnose.likelihood`), not
-columns. The per-run offset and, for ``periodic``, the phase are re-estimated
+columns. The per-run offset, for ``periodic`` the phase and for ``hysteresis``
+the level before the first excursion beyond the deadband (the branch the part
+was left in before power-on) are re-estimated
 on every run (a power-on constant and an interference phase are not
 properties that carry over from one run to the next); everything else is
 fitted on the fit recording only.

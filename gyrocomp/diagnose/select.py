@@ -415,6 +415,12 @@ def _refit(problem: Problem, baseline: Fitted, order: tuple, spec: dict, noise: 
 def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_problems=()) -> dict:
     """Grid search (then bounded refinement in log scale) of the effect's nonlinear parameter.
 
+    Every parameter is refined between the grid's neighbours of the best
+    point, the hysteresis deadband too: a relay's switching width is
+    anything from half a degree to 15 degC, and a width between two grid
+    points moves every switch by tens of seconds on a 1 degC/min ramp,
+    which a strong hysteresis shows (and a noise term would absorb).
+
     The noise is held at the current model's; the other columns are
     block-averaged once. With `others_problems` (``(problem, model)`` pairs:
     the holdout with its own noise, in the joint criterion of
@@ -433,9 +439,6 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_probl
         return float(_joint_deviance(parts, params, effect).sum())
 
     grid = KINDS[effect].grid(s, length_s, run.block_s)
-    if effect == "hysteresis":
-        values = [deviance({key: float(v)}) for v in grid]
-        return {key: float(grid[int(np.argmin(values))])}
     if effect == "periodic":
         values = _periodic_grid_deviances(parts, grid)
     else:

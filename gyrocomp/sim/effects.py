@@ -24,6 +24,7 @@ __all__ = [
     "element_temperature",
     "temperature_rate",
     "hysteresis_branch",
+    "first_excursion",
     "warmup",
     "rate_ramp",
     "periodic",
@@ -187,14 +188,29 @@ def hysteresis_branch(time_s, temperature_c, deadband_c):
     out = np.empty(n)
     if n == 0:
         return out
-    first = np.flatnonzero(np.abs(temperature - temperature[0]) > deadband_c)
-    state = 1.0 if first.size == 0 or temperature[first[0]] > temperature[0] else -1.0
+    first = first_excursion(temperature, deadband_c)
+    state = 1.0 if first == n or temperature[first] > temperature[0] else -1.0
     start = 0
     while start < n:
         switch = _next_reversal(temperature, start, state, deadband_c)
         out[start:switch] = state
         start, state = switch, -state
     return out
+
+
+def first_excursion(temperature_c, deadband_c):
+    """Index of the first sample more than `deadband_c` from the power-on temperature (the length when none is).
+
+    Before it a hysteresis has seen no excursion beyond its play, so its
+    branch is the one the part was left in before power-on, which the
+    recording does not show.
+
+    >>> first_excursion(np.array([20.0, 20.2, 21.5, 23.0]), 1.0), first_excursion(np.array([20.0, 20.2]), 1.0)
+    (2, 2)
+    """
+    temperature = np.asarray(temperature_c, dtype=float)
+    beyond = np.flatnonzero(np.abs(temperature - temperature[0]) > deadband_c) if temperature.size else []
+    return int(beyond[0]) if len(beyond) else int(temperature.size)
 
 
 def warmup(time_s, amplitude_dps, tau_s):

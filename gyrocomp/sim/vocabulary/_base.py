@@ -34,6 +34,10 @@ class Effect(abc.ABC):
         Free parameters on one run (a grid-searched one counts as one).
     per_run : tuple of str
         Design columns re-estimated on every run (an interference phase).
+    unit_columns : int or None
+        How many leading columns make the unit shape of the reported
+        amplitude (:meth:`amplitude`; detection limits); None: all of them,
+        averaged (a sinusoid's phases).
     """
 
     name: str = ""
@@ -44,6 +48,7 @@ class Effect(abc.ABC):
     grid_setting: str | None = None
     n_params: int = 1
     per_run: tuple = ()
+    unit_columns: int | None = None
 
     def __repr__(self):
         return f"<effect {self.name}>"

@@ -22,22 +22,34 @@ class Hysteresis:
 
 
 class _Hysteresis(Effect):
-    """Column: the heating (+1) / cooling (-1) branch of a play operator of width ``deadband_c``."""
+    """Columns: the heating (+1) / cooling (-1) branch of a play operator of width ``deadband_c``, and the power-on part.
+
+    The branch the part was left in before power-on is not in the recording:
+    until the temperature first moves beyond the play
+    (:func:`~gyrocomp.sim.effects.first_excursion`) the bias sits on an
+    unknown branch (or, for a spread of widths, between the branches).
+    The indicator of that first part is re-estimated on every run, as
+    the offset is.
+    """
 
     name = "hysteresis"
     settings = Hysteresis
     needs_temperature = True
     nonlinear = "deadband_c"
     grid_setting = "hysteresis_deadband_c"
-    n_params = 2
+    n_params = 3
+    per_run = ("hysteresis_power_on",)
+    unit_columns = 1
 
     def bias(self, time_s, housing_c, gyro):
         h = gyro.hysteresis
         return h.amplitude_dps * shapes.hysteresis_branch(time_s, housing_c, h.deadband_c)
 
     def columns(self, run, params, poly_degree=3, scale=None):
-        col = shapes.hysteresis_branch(run.time_s, run.temperature_c, params["deadband_c"])
-        return col[:, None], [self.name]
+        d = params["deadband_c"]
+        branch = shapes.hysteresis_branch(run.time_s, run.temperature_c, d)
+        power_on = np.arange(branch.size) < shapes.first_excursion(run.temperature_c, d)
+        return np.column_stack([branch, power_on]), [self.name, *self.per_run]
 
     def grid(self, settings, length_s, block_s):
         return np.array([float(v) for v in getattr(settings, self.grid_setting)])

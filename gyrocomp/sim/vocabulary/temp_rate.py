@@ -1,8 +1,10 @@
-"""``temp_rate``: a bias proportional to dT/dt (thermal-gradient sensitivity, IEEE Std 1431)."""
+"""``temp_rate``: a bias proportional to dT/dt (thermal-gradient sensitivity, IEEE Std 1431), heating and cooling apart."""
 
 from __future__ import annotations
 
 import dataclasses
+
+import numpy as np
 
 from gyrocomp.sim.vocabulary._base import Effect
 from gyrocomp.sim import effects as shapes
@@ -11,29 +13,47 @@ from gyrocomp.sim.profile import unit_field
 
 @dataclasses.dataclass(frozen=True)
 class TempRate:
-    """``temp_rate``: bias ``g dT/dt`` from thermal gradients (IEEE Std 1431)."""
+    """``temp_rate``: bias ``g dT/dt + a |dT/dt|`` from thermal gradients (IEEE Std 1431).
+
+    The gradient across the part is not the same heating and cooling (the
+    heater and the chamber's air flow differ), so the sensitivity is
+    ``g + a`` while heating and ``g - a`` while cooling; ``a = 0`` is the
+    symmetric sensitivity.
+    """
 
     enabled: bool = True
     coefficient_dps_per_c_per_s: float = unit_field(1.5, "deg/s per degC/s")
+    asymmetry_dps_per_c_per_s: float = unit_field(0.0, "deg/s per degC/s")
 
 
 class _TempRate(Effect):
-    """Column: dT/dt of the measured temperature (Savitzky-Golay, ``run.rate_smooth_s``); zero in a soak."""
+    """Columns: dT/dt of the measured temperature (Savitzky-Golay, ``run.rate_smooth_s``) and its magnitude; zero in a soak.
+
+    The two columns span every pair of heating and cooling sensitivities:
+    ``g_heat max(dT/dt, 0) + g_cool min(dT/dt, 0) = g dT/dt + a |dT/dt|``
+    with ``g = (g_heat + g_cool) / 2`` and ``a = (g_heat - g_cool) / 2``.
+    The amplitude of a detection limit is that of the first (symmetric) one.
+    """
 
     name = "temp_rate"
     settings = TempRate
     needs_temperature = True
-    n_params = 1
+    n_params = 2
+    unit_columns = 1
 
     def bias(self, time_s, housing_c, gyro):
-        return gyro.temp_rate.coefficient_dps_per_c_per_s * shapes.temperature_rate(time_s, housing_c)
+        t = gyro.temp_rate
+        rate = shapes.temperature_rate(time_s, housing_c)
+        return t.coefficient_dps_per_c_per_s * rate + t.asymmetry_dps_per_c_per_s * np.abs(rate)
 
     def columns(self, run, params, poly_degree=3, scale=None):
-        col = shapes.temperature_rate(run.time_s, run.temperature_c, smooth_s=run.rate_smooth_s)
-        return col[:, None], [self.name]
+        rate = shapes.temperature_rate(run.time_s, run.temperature_c, smooth_s=run.rate_smooth_s)
+        return np.column_stack([rate, np.abs(rate)]), [self.name, f"{self.name}_asymmetry"]
 
     def report(self, coef, params, noise):
-        return self.amplitude(coef[self.name])
+        return self.amplitude(coef[self.name]) | {
+            "asymmetry_dps_per_c_per_s": {"value": coef[f"{self.name}_asymmetry"], "unit": "deg/s per degC/s"}
+        }
 
     def amplitude(self, value):
         return {"coefficient_dps_per_c_per_s": {"value": value, "unit": "deg/s per degC/s"}}

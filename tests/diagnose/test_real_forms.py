@@ -1,0 +1,109 @@
+"""Real-world forms of the vocabulary's effects, each on a constructed oven run.
+
+Real gyros show the vocabulary's effects in forms the simulator's first
+shapes missed (issue #16): a temperature-rate sensitivity that differs
+between heating and cooling, a hysteresis whose branch at power-on is
+unknown. The right family must win on the one criterion because its shape
+is right, not because a rule was added. Each case is built here from numpy
+(piecewise-linear oven profile, closed-form dT/dt) and the independent
+benchmark generator's relay (``benchmarks/independent_gen.py``, which
+imports no gyrocomp code), not from :mod:`gyrocomp.sim`.
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gyrocomp.diagnose import DiagnoseSettings, problems
+from gyrocomp.diagnose.effects import EFFECTS
+from gyrocomp.diagnose.select import Search, extend, fit_baseline
+from gyrocomp.recordings import recording_from_frame
+from gyrocomp.sim.effects import first_excursion
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+from independent_gen import relay_sum  # noqa: E402  (the independent generator's relay: no gyrocomp code)
+
+SIGMA = 0.01  # white rate noise per 1 Hz sample [deg/s]
+KNOTS = [(0, 25), (1800, 25), (3000, 65), (6000, 65), (8400, 5), (11400, 5), (13200, 35), (14400, 35)]
+"""(time [s], chamber temperature [degC]): power-on soak, heat, soak, cool, soak, heat, soak; 4 h."""
+
+
+def _oven(seed, knots=KNOTS):
+    """1 Hz time, temperature (exact ramps and soaks, plus 0.01 degC sensor noise) and its exact dT/dt."""
+    rng = np.random.default_rng(seed)
+    kt, kc = np.array(knots, dtype=float).T
+    t = np.arange(kt[-1])
+    temperature = np.interp(t, kt, kc)
+    slope = np.diff(kc) / np.diff(kt)
+    rate_c = slope[np.clip(np.searchsorted(kt, t, side="right") - 1, 0, slope.size - 1)]
+    return t, temperature, temperature + rng.normal(0.0, 0.01, t.size), rate_c, rng
+
+
+def _baseline(temperature, rng):
+    return 0.02 + 2e-3 * (temperature - 25.0) - 1e-5 * (temperature - 25.0) ** 2 + rng.normal(0.0, SIGMA, temperature.size)
+
+
+def _search(t, rate, measured):
+    rec = recording_from_frame(pd.DataFrame({"time": t, "rate": rate, "temperature": measured}), name="oven")
+    fit_p, _, skipped = problems(rec, [], DiagnoseSettings())
+    assert not skipped
+    return fit_p, Search([fit_p], list(EFFECTS))
+
+
+def test_heating_and_cooling_sensitivities_are_one_temp_rate():
+    """g = 0.6 deg/s per degC/s heating, 0.2 cooling: temp_rate alone, with g = 0.4 and a = 0.2 (a thermal lag or noise does not stand in)."""
+    t, temperature, measured, rate_c, rng = _oven(1)
+    g_heat, g_cool = 0.6, 0.2
+    rate = _baseline(temperature, rng) + np.where(rate_c > 0, g_heat, g_cool) * rate_c
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert model.order == ("temp_rate",)
+    coef = dict(zip(model.names, model.beta))
+    assert coef["temp_rate"] == pytest.approx(0.5 * (g_heat + g_cool), rel=0.1)
+    assert coef["temp_rate_asymmetry"] == pytest.approx(0.5 * (g_heat - g_cool), rel=0.2)
+
+
+def test_a_symmetric_sensitivity_shows_no_asymmetry():
+    """g = 0.4 both ways: the asymmetry column's coefficient is within 4 standard errors of 0 (a few % of g)."""
+    t, temperature, measured, rate_c, rng = _oven(2)
+    rate = _baseline(temperature, rng) + 0.4 * rate_c
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert model.order == ("temp_rate",)
+    coef = dict(zip(model.names, model.beta))
+    assert coef["temp_rate"] == pytest.approx(0.4, rel=0.1)
+    assert abs(coef["temp_rate_asymmetry"]) < 0.05 * 0.4
+
+
+def test_a_hysteresis_left_on_the_other_branch_before_power_on_is_one_hysteresis():
+    """A 3 degC relay (between deadband grid points) on its cooling branch at power-on, first moved by heating: hysteresis alone, no warm-up for the power-on soak.
+
+    The recording cannot tell the branch before the first excursion beyond
+    the play; the hysteresis' power-on column (re-estimated per run) carries
+    it: its coefficient is the step from the assumed heating branch down to
+    the true cooling one, ``-2 A``.
+    """
+    t, temperature, measured, _, rng = _oven(3)
+    amplitude = 0.01
+    rate = _baseline(temperature, rng) + amplitude * relay_sum(temperature, [3.0], [-1.0])
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert model.order == ("hysteresis",)
+    coef = dict(zip(model.names, model.beta))
+    assert coef["hysteresis"] == pytest.approx(amplitude, rel=0.1)
+    assert coef["hysteresis_power_on"] == pytest.approx(-2.0 * amplitude, rel=0.1)
+    # 3 degC lies between the grid's 2 and 4 degC: the refinement finds it (0.01 degC noise, 1 s sampling at 2 degC/min).
+    assert model.spec["hysteresis"]["deadband_c"] == pytest.approx(3.0, abs=0.1)
+
+
+def test_the_power_on_column_spans_the_samples_before_the_first_excursion():
+    t, temperature, measured, _, rng = _oven(4)
+    fit_p, _ = _search(t, _baseline(temperature, rng), measured)
+    first = first_excursion(fit_p.run.temperature_c, 4.0)
+    model = extend(fit_p, fit_baseline(fit_p), "hysteresis")
+    assert "hysteresis_power_on" in model.names
+    # The chamber leaves 25 degC at 1800 s at 2 degC/min: 4 degC beyond it 120 s later.
+    assert fit_p.run.time_s[first] == pytest.approx(1800.0 + 120.0, abs=5.0)
