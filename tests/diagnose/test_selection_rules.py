@@ -11,10 +11,9 @@ import dataclasses
 
 import numpy as np
 import pandas as pd
-import pytest
 from numpy.testing import assert_allclose
 
-from gyrocomp.diagnose import DiagnoseSettings, diagnose, problems, reduce_recording
+from gyrocomp.diagnose import DiagnoseSettings, diagnose, reduce_recording
 from gyrocomp.diagnose.effects import Run
 from gyrocomp.diagnose.select import Problem, Search, extend, fit_baseline
 from gyrocomp.recordings import recording_from_frame
