@@ -107,8 +107,8 @@ def parquet_options(schema) -> dict:
     """Writer options of every Parquet table: dictionary encoding for the columns that are not floating point only.
 
     Measured values (time, rates, temperatures) hardly ever repeat, so a
-    dictionary of them is built and then dropped page after page: of
-    writing 7.2e6 rows of five float columns, that took 5.4 s of 6.9 s.
+    dictionary of them is built and then dropped page after page: 7.2e6
+    rows of five float columns took 5.4 s to write with it, 1.5 s without.
     """
     import pyarrow as pa
 
