@@ -27,7 +27,12 @@ measured temperature, white noise) on a fit recording, then
    every run is tested for structure the model does not predict
    (:func:`gyrocomp.diagnose.unexplained.verdict`); when some is found the
    report's ``unexplained.present`` is true and the gap of the selected
-   model is not called explained.
+   model is not called explained. The selected effects that only stand in
+   for what the tests flag are then unlisted
+   (:func:`gyrocomp.diagnose.unexplained.confirm`): a noise term without
+   its own signature on all runs, a periodic disturbance not found again
+   on the holdout, an effect that gains nothing beside the structure the
+   tests found on the fit run.
 
 The gap and the localization compare each residual with the model's noise
 terms, whose white level is the fit run's sample-level one
@@ -185,10 +190,24 @@ def diagnose(
         search = Search(selection, candidates, start=start, admissible=admissible, callback=callback)
         selected = search.run()
         baseline, first_step, steps = search.baseline, search.first_step, search.steps
-        models = {"baseline": baseline, "selected": selected}
         white = sample_arw(fit_p.run)
         gapped = any(p.run.gapped for p in [fit_p] + extra_p)
-        gaps = {name: _gaps(fit_p, hold_p, m, white, gapped) for name, m in models.items()}
+        labelled = [("fit", fit_p)] + ([("holdout", hold_p)] if hold_p is not None else [])
+        gaps = {"baseline": _gaps(fit_p, hold_p, baseline, white, gapped)}
+        # Effects that only stand in for structure the residual tests flag are unlisted (their own signature,
+        # or no gain beside that structure): the verdict of the model that remains.
+        selected, verdict = _unexplained.confirm(
+            search,
+            labelled,
+            selected,
+            unexplained_settings,
+            None if gapped else [gaps["baseline"][label]["residual"] for label, _ in labelled],
+            signature_settings,
+        )
+        if verdict["unlisted"]:
+            steps.append({"move": "confirm", "accepted": None, "dropped": [u["effect"] for u in verdict["unlisted"]]})
+        models = {"baseline": baseline, "selected": selected}
+        gaps["selected"] = _gaps(fit_p, hold_p, selected, white, gapped)
         cand = {}
         for effect, model in first_step.items():
             g = _gaps(fit_p, hold_p, model, white, gapped)
@@ -205,13 +224,6 @@ def diagnose(
                 else detection_limit(selection, selected, effect, first_step[effect].spec.get(effect, {}), s.bic_margin, s.detection_power)
             )
         local = {} if gapped else _localization(fit_p, hold_p, models, gaps, s, white)
-        labelled = [("fit", fit_p)] + ([("holdout", hold_p)] if hold_p is not None else [])
-        verdict = _unexplained.verdict(
-            labelled,
-            selected,
-            unexplained_settings,
-            None if gapped else [gaps["baseline"][label]["residual"] for label, _ in labelled],
-        )
     order = [e for e in selected.order if e not in start_effects]
     gap = {
         name: {
@@ -226,7 +238,7 @@ def diagnose(
         }
         for name, g in gaps.items()
     }
-    gap["protocol"] = _protocol(selection, hold_p)
+    gap["protocol"] = _protocol(selection, hold_p, verdict["unlisted"])
     return {
         "selected_effects": order,
         "start_effects": list(start_effects),
@@ -351,8 +363,14 @@ def _as_list(holdout) -> list:
     return list(holdout) if isinstance(holdout, (list, tuple)) else [holdout]
 
 
-def _protocol(selection, hold_p) -> dict:
-    """Which runs selected the effects and which one the held-out gap comes from."""
+def _protocol(selection, hold_p, unlisted=()) -> dict:
+    """Which runs selected the effects, which one the held-out gap comes from, and whether it unlisted any.
+
+    An effect unlisted for its signature or for not being found again
+    (:func:`gyrocomp.diagnose.unexplained.confirm`, rules 1 and 2) was
+    judged on the holdout too: the holdout then took part in what is
+    listed, never in what was added.
+    """
     names = [os.path.basename(p.run.name) for p in selection]
     held = os.path.basename(hold_p.run.name) if hold_p is not None else None
     if hold_p is None:
@@ -361,6 +379,9 @@ def _protocol(selection, hold_p) -> dict:
         text = f"effects selected on the fit run only; the held-out gap is from {held}, which took no part in the selection"
     else:
         text = f"effects selected on {' + '.join(names)}; the held-out gap is from {held}, which took no part in the selection"
+    read = [u["effect"] for u in unlisted if u["holdout"]]
+    if read and held is not None:
+        text += f"; {', '.join(read)} unlisted on evidence that includes {held} (its signature or its replication there)"
     return {"selection_runs": names, "holdout_run": held, "description": text}
 
 

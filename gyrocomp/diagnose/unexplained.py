@@ -24,6 +24,18 @@ test below is then exact (or conservative) with a known false-alarm rate:
 * ``spectral_line`` -- a sinusoid at an unknown frequency (at least
   ``line_min_cycles`` cycles in the run): Fisher's ``g`` of the periodogram
   of ``e``, ``P = m (1 - g)^(m-1)`` [1]_;
+* ``moving_line`` -- a line whose frequency moves (a tone that drifts with
+  temperature or age, a chirp) or that comes and goes: Fisher's ``g`` in
+  each of ``line_segments`` consecutive segments of ``e`` (at least
+  ``line_min_cycles`` cycles in a segment), Bonferroni over the segments,
+  ``P = min(1, K min_k P_k)``. A drifting line spreads its power over many
+  Fourier frequencies of the whole run, where the ``spectral_line`` test
+  does not see it, and a flicker or random walk absorbs it: a stationary
+  noise has the same spectrum in every segment;
+* ``noise_correlation`` -- a correlated noise the model's noise terms do
+  not take (a telegraph noise under white noise, a wander the noise
+  terms' signature refused): Ljung-Box ``Q`` of ``e`` over
+  ``whiteness_lags`` lags, ``chi^2_h`` (:func:`gyrocomp.diagnose.signature.ljung_box`);
 * ``noise_blocks`` -- a block-level noise that changes over the run: the
   Brown-Forsythe test of the spread of ``e`` in ``noise_segments``
   segments, ``F_(k-1, n-k)`` [2]_;
@@ -76,11 +88,12 @@ import numpy as np
 from scipy import linalg, stats
 
 from gyrocomp.config import bind, load_config
-from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise
+from gyrocomp.diagnose.effects import KINDS, PER_RUN
+from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 from gyrocomp.diagnose import signature
 from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins
 
-__all__ = ["UnexplainedSettings", "get_config", "verdict", "holm", "fisher_g", "variance_segments", "variance_groups"]
+__all__ = ["UnexplainedSettings", "get_config", "verdict", "confirm", "gain_beside", "replication", "holm", "fisher_g", "variance_segments", "variance_groups"]
 
 _DEG_H = 3600.0
 """deg/h per deg/s."""
@@ -99,6 +112,9 @@ class UnexplainedSettings:
     soak_rate_c_per_min: float = 0.05
     time_segments: int = 8
     line_min_cycles: int = 3
+    line_segments: int = 4
+    whiteness_lags: int = 10
+    replication_alpha: float = 0.01
     gap_block_s: float = 100.0
 
 
@@ -142,6 +158,183 @@ def verdict(
         means and its ``share_of_gap``, None without `baseline_residuals`),
         ``tests`` (every test's statistic and p).
     """
+    return _verdict(runs, model, settings, baseline_residuals, signature_settings)[0]
+
+
+def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSettings(), baseline_residuals=None,
+            signature_settings: signature.SignatureSettings = signature.SignatureSettings()):
+    """Unlist the selected effects that only stand in for structure the residual tests flag; the final verdict.
+
+    An effect is listed only when its shape is that effect's. After the
+    selection, while :func:`verdict` finds something unexplained, one
+    selected effect (none of the start model's) is unlisted and the model
+    refitted without it (``search.without``):
+
+    1. a noise term that does not show its own signature on all runs
+       (:func:`gyrocomp.diagnose.signature.check`: its level agrees between
+       the runs, its innovations are white without trend or temperature
+       dependence, its Allan slope holds) and that, beside the deterministic
+       structures the tests find on the fit run in its place (the model
+       without it), gains at most ``bic_margin`` (:func:`gain_beside`): it
+       absorbs what the vocabulary does not explain. A true flicker beside a
+       drift keeps its place (the drift is reported);
+    2. otherwise an effect with per-run columns (a periodic disturbance's
+       phase and amplitude) that the holdout does not need at the effect's
+       fitted shape (:func:`replication`, p above ``replication_alpha``);
+    3. otherwise the effect that, beside the deterministic structures the
+       tests found on the fit run (a step, a spectral line, temperature
+       bins, windows after power-on, segments of time, a heating/cooling
+       offset: :meth:`_Prepared.structure`), gains least: ``Delta(-2 log L)
+       - k ln n`` of removing it from the fit run's model with those
+       columns in the design (its nonlinear parameters kept, the noise
+       refitted), when that gain is at most the selection's
+       ``bic_margin``. An effect that earns its place against the
+       vocabulary but not beside a step at one time, say, described the step.
+
+    The rules only unlist, and only when the verdict is present, so a
+    recording the model explains is never touched (its false-alarm rate is
+    the verdict's). The structures are looked for on the fit run only;
+    rules 1 and 2 also read the holdout (the signature's agreement between
+    runs, the replication), which then took part in what is listed (never
+    in what was added): the report's protocol says so.
+
+    Parameters
+    ----------
+    search : gyrocomp.diagnose.select.Search
+        The finished search: ``fit`` (the fit run's Problem), ``baseline``
+        (its effects are kept), ``margin``, ``without(model, effect)``.
+    runs : sequence of (str, Problem)
+        As :func:`verdict`; the run labelled ``"fit"`` is the one searched
+        for structures.
+    model : gyrocomp.diagnose.select.Fitted
+        The selected model.
+    settings, baseline_residuals, signature_settings
+        As :func:`verdict`.
+
+    Returns
+    -------
+    model : Fitted
+        The model with the unlisted effects removed.
+    result : dict
+        The verdict of that model (:func:`verdict`), with ``unlisted``: one
+        ``{"effect", "reason", "gain", "holdout"}`` per unlisted effect (``holdout``: the
+        holdout's evidence took part), in order; the
+        verdict is present when any effect was unlisted.
+    """
+    s = settings
+    kept = len(search.baseline.order)
+    unlisted = []
+    while True:
+        result, prepared = _verdict(runs, model, settings, baseline_residuals, signature_settings)
+        chosen = list(model.order[kept:])
+        if not result["present"] or not chosen:
+            break
+        failing = [t for t in chosen if t in result["signatures"] and not result["signatures"][t]["ok"]]
+        held = next((p for label, p in runs if label == "holdout"), None)
+        lost = {e: replication(held, model, e) for e in chosen if KINDS[e].per_run and held is not None}
+        lost = {e: p for e, p in lost.items() if p > s.replication_alpha}
+        fit_p = next((p for label, p in runs if label == "fit"), None)
+        standing_in = {t: g for t in failing if (g := _gain_in_place(search, fit_p, model, t, s)) <= search.margin}
+        if standing_in:
+            effect = min(standing_in, key=standing_in.get)
+            entry = {"effect": effect, "gain": float(standing_in[effect]), "holdout": True, "reason":
+                     "it does not show its own signature (" + "; ".join(result["signatures"][effect]["reasons"][:2])
+                     + f") and gains {standing_in[effect]:.1f} in BIC (<= {search.margin:g}) beside the structure the tests "
+                     "find on the fit run in its place"}
+        elif lost:
+            effect = max(lost, key=lost.get)
+            entry = {"effect": effect, "gain": None, "holdout": True, "reason":
+                     f"at its fitted {', '.join(model.spec.get(effect, {}))} it is not found again on the holdout "
+                     f"(p = {lost[effect]:.2g} > {s.replication_alpha:g})"}
+        else:
+            fit = next((pr for pr in prepared if pr.label == "fit"), None)
+            names = [k for k in (fit.kept if fit is not None else []) if not k.startswith("noise_")]
+            if not names:
+                break
+            G = fit.structure(names)
+            gains = {e: gain_beside(fit.problem, model, e, G) for e in chosen}
+            effect = min(gains, key=gains.get)
+            if gains[effect] > search.margin:
+                break
+            entry = {"effect": effect, "gain": float(gains[effect]), "holdout": False, "reason":
+                     f"beside the {', '.join(n.replace('_', ' ') for n in names)} the tests found on the fit run it gains "
+                     f"{gains[effect]:.1f} in BIC (<= {search.margin:g}): it stands in for that structure"}
+        unlisted.append(entry)
+        model = search.without(model, effect)
+    if unlisted:
+        result["present"] = True
+        result["hints"] = [f"{u['effect']} is not listed: {u['reason']}" for u in unlisted] + result["hints"]
+    result["unlisted"] = unlisted
+    return model, result
+
+
+def replication(problem, model, effect):
+    """p-value that `effect`'s per-run columns explain nothing on another run (`problem`), at `model`'s shape.
+
+    The model's nonlinear parameters and shared coefficients are frozen at
+    their fit-run values, the per-run columns refitted, the noise levels
+    refitted on that run; the likelihood-ratio statistic of the effect's own
+    per-run columns (a periodic disturbance's sine and cosine at its fitted
+    period) is ``chi^2_k`` when the effect is absent there (Wilks). A shape
+    the effect has on the gyro is found again; one fitted to something else
+    on one run (a sinusoid fitted to a bias jump at one temperature) is not.
+    """
+    Xb, names = problem.design_blocks(model.spec)
+    if names != model.names:
+        raise ValueError(f"design {names} differs from the model's {model.names}")
+    free = np.array([n in PER_RUN for n in names])
+    own = np.array([n in KINDS[effect].per_run for n in names])
+    y = problem.y - Xb[:, ~free] @ model.beta[~free]
+    terms = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
+    noise, with_it, _ = fit_noise(y, Xb[:, free], problem.basis, model.noise, terms)
+    without = profile_deviance(y, Xb[:, free & ~own], problem.basis.whitener(noise))[0]
+    return float(stats.chi2.sf(max(without - with_it, 0.0), int(own.sum())))
+
+
+def _gain_in_place(search, problem, model, term, s: UnexplainedSettings):
+    """:func:`gain_beside` of noise `term` beside the structures the tests find on the fit run without it.
+
+    The deterministic tests of the fit run under the model without `term`
+    (Holm at ``family_alpha`` over that run's tests), the findings that say
+    the same thing reported once (:meth:`_Prepared.explain`); with none,
+    ``inf`` (the term stands in for nothing a test describes).
+    """
+    if problem is None:
+        return np.inf
+    pr = _Prepared("fit", problem, search.without(model, term), s)
+    names = list(pr.tests)
+    rejected = holm([pr.tests[k]["p"] for k in names], s.family_alpha)
+    found = [k for k, r in zip(names, rejected) if r and not k.startswith("noise_")]
+    kept = [k for k in pr.explain(found, s.family_alpha / max(len(names), 1)) if not k.startswith("noise_")]
+    if not kept:
+        return np.inf
+    return gain_beside(problem, model, term, pr.structure(kept))
+
+
+def gain_beside(problem, model, effect, G):
+    """``Delta(-2 log L) - k ln n`` of removing `effect` from `model` on `problem`, the columns `G` in the design.
+
+    The effect's nonlinear parameters and the others' are kept; the noise
+    levels of the model's terms (without `effect` when it is one) are
+    refitted by maximum likelihood; ``k`` is the effect's parameter count
+    and ``n`` the number of block means (the selection's BIC, eq. of
+    :meth:`gyrocomp.diagnose.select.Problem.bic`).
+    """
+    y, basis = problem.y, problem.basis
+    X = problem.design_blocks(model.spec)[0]
+    free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
+    full = fit_noise(y, np.hstack([X, G]), basis, model.noise, free)[1]
+    if effect in TERMS:
+        reduced = dataclasses.replace(model.noise, **{effect: 0.0})
+        less = fit_noise(y, np.hstack([X, G]), basis, reduced, tuple(t for t in free if t != effect))[1]
+    else:
+        Xm = problem.design_blocks({k: v for k, v in model.spec.items() if k != effect})[0]
+        less = fit_noise(y, np.hstack([Xm, G]), basis, model.noise, free)[1]
+    return float(less - full - KINDS[effect].n_params * np.log(y.size))
+
+
+def _verdict(runs, model, settings, baseline_residuals, signature_settings):
+    """:func:`verdict` and the prepared runs (their structures, for :func:`confirm`)."""
     s = settings
     prepared = [_Prepared(label, p, model, s) for label, p in runs]
     tests = [(pr, name, result) for pr in prepared for name, result in pr.tests.items()]
@@ -177,7 +370,8 @@ def verdict(
         "hints": hints,
         "size": size,
         "tests": {pr.label: {name: _public(r) for name, r in pr.tests.items()} for pr in prepared},
-    }
+        "unlisted": [],
+    }, prepared
 
 
 def holm(p_values, alpha):
@@ -296,6 +490,7 @@ class _Prepared:
         self.tests = self._deterministic_tests(np.empty((n, 0)))
         e = self._innovations(np.empty((n, 0)))[0]
         self.tests["noise_blocks"] = _noise_test(*variance_segments(e, s.noise_segments), s)
+        self.tests["noise_correlation"] = self._correlation(e)
         # Pairs within blocks (no block spans a gap), block after block in time.
         x = np.asarray(run.rate_dps, dtype=float)[: n * run.n_per_block].reshape(n, run.n_per_block)
         even = run.n_per_block - run.n_per_block % 2
@@ -315,6 +510,14 @@ class _Prepared:
                 self.tests["noise_temperature"] = test
         self.duration_s = end
         self.kept = []
+
+    def _correlation(self, e):
+        """Ljung-Box test of the innovations `e` (white under the model)."""
+        lags = min(self.settings.whiteness_lags, e.size // 4)
+        q, p = signature.ljung_box(e, lags)
+        x = e - e.mean()
+        rho = [float(x[k:] @ x[:-k] / (x @ x)) for k in range(1, lags + 1)]
+        return {"stat": q, "p": p, "lags": lags, "rho": rho}
 
     def _whiten(self, G):
         return linalg.solve_triangular(self.lower, G, lower=True, check_finite=False)
@@ -347,7 +550,26 @@ class _Prepared:
             "period_s": e.size * self.block_s / j,
             "log10_p": min(0.0, _log10(np.log(m) + (m - 1) * np.log1p(-min(g, 1.0 - 1e-16)))),
         }
+        out["moving_line"] = self._moving_line(e)
         return out
+
+    def _moving_line(self, e):
+        """Fisher's ``g`` in each of ``line_segments`` segments of `e`; Bonferroni over them."""
+        k, cycles = self.settings.line_segments, self.settings.line_min_cycles
+        parts = np.array_split(np.arange(e.size), k)
+        if (parts[-1].size - 1) // 2 - cycles + 1 < 2:
+            # Segments too short to hold two Fourier frequencies of at least `cycles` cycles (a run in bursts).
+            return {"stat": 0.0, "p": 1.0, "p_segments": [], "segments": [], "period_s": [], "power": []}
+        found = [fisher_g(e[idx], cycles) for idx in parts]
+        p = [f[1] for f in found]
+        return {
+            "stat": float(max(f[0] for f in found)),
+            "p": float(min(1.0, k * min(p))),
+            "p_segments": p,
+            "segments": [[int(idx[0]), int(idx[-1]) + 1] for idx in parts],
+            "period_s": [idx.size * self.block_s / f[2] for idx, f in zip(parts, found)],
+            "power": [float(f[0] * e[idx] @ e[idx]) for idx, f in zip(parts, found)],
+        }
 
     def explain(self, names, alpha):
         """The rejected deterministic structures that remain significant given the stronger ones.
@@ -372,6 +594,9 @@ class _Prepared:
             e = self._innovations(self.structure(kept))[0]
             if _noise_test(*variance_segments(e, self.settings.noise_segments), self.settings)["p"] < alpha:
                 kept.append("noise_blocks")
+        if "noise_correlation" in names and self._correlation(self._innovations(self.structure(kept))[0])["p"] < alpha:
+            # Still correlated with the kept structures in the design (a step alone makes the innovations correlated).
+            kept.append("noise_correlation")
         kept += [k for k in ("noise_samples", "noise_temperature") if k in names]
         self.kept = kept
         return kept
@@ -384,6 +609,8 @@ class _Prepared:
         if name == "spectral_line":
             e = self._innovations(np.empty((n, 0)))[0]
             return t["stat"] * float(e @ e) * 2.0 - 3.0 * np.log(n)
+        if name == "moving_line":
+            return float(np.sum(2.0 * np.asarray(t["power"]) - 3.0 * np.log(n)))
         return t["stat"] - t["dof"] * np.log(n)
 
     def structure(self, names):
@@ -394,6 +621,13 @@ class _Prepared:
         if "spectral_line" in names:
             w = 2.0 * np.pi / self.tests["spectral_line"]["period_s"]
             cols.append(np.column_stack([np.sin(w * self.t), np.cos(w * self.t)]))
+        if "moving_line" in names:
+            # In each segment a sinusoid at that segment's own line: the drifting tone piecewise.
+            line = self.tests["moving_line"]
+            for (a, b), period in zip(line["segments"], line["period_s"]):
+                inside = (np.arange(self.t.size) >= a) & (np.arange(self.t.size) < b)
+                w = 2.0 * np.pi / period
+                cols.append(np.column_stack([np.sin(w * self.t) * inside, np.cos(w * self.t) * inside]))
         return np.hstack(cols) if cols else np.empty((self.t.size, 0))
 
     def _part(self, names):
@@ -415,6 +649,14 @@ class _Prepared:
                 {"temperature_c": hi, "ratio": result["ratio"]},
                 f"the sample (white) noise depends on temperature: {result['ratio']:.2f} times larger at "
                 f"{hi[0]:.1f}-{hi[1]:.1f} degC than at {lo[0]:.1f}-{lo[1]:.1f} degC",
+            )
+        if name == "noise_correlation":
+            rho = result["rho"]
+            return (
+                {"timescale_s": [self.block_s, result["lags"] * self.block_s]},
+                f"the residual is correlated beyond the model's noise (Ljung-Box over {result['lags']} lags of "
+                f"{self.block_s:.0f} s; lag-1 correlation {rho[0]:+.2f}): a correlated noise (telegraph, Markov) "
+                "or a slow structure that no vocabulary noise term takes with its own signature",
             )
         if name.startswith("noise_"):
             std = np.asarray(result["std"])
@@ -465,6 +707,16 @@ class _Prepared:
             return (
                 {"time_s": [t0 - self.block_s, t0 + self.block_s]},
                 f"a step of {float(coef[-1]) * _DEG_H:+.3g} deg/h at {t0 / 3600:.2f} h",
+            )
+        if name == "moving_line":
+            periods = result["period_s"]
+            spans = ", ".join(
+                f"{p:.0f} s in {a * self.block_s / 3600:.1f}-{b * self.block_s / 3600:.1f} h"
+                for (a, b), p in zip(result["segments"], periods)
+            )
+            return (
+                {"timescale_s": [float(min(periods)), float(max(periods))]},
+                f"a periodic component whose period moves over the run (rms {amp:.3g} deg/h): {spans}",
             )
         period = result["period_s"]
         return (

@@ -72,7 +72,8 @@ def test_lsm6dsm_tvac_bursts(real_data):
     report = diagnose(rec.axis("rate_x"))
     assert report["blocks"]["segments"]["fit"] == 25 and report["blocks"]["n_fit"] == 25
     # 5 s bursts 305 s apart on a monotonic 8 degC cooling: the cubic in temperature carries the drift
-    # (+0.03 deg/s/degC, README), no effect of the vocabulary is named and nothing is left unexplained
+    # (+0.03 deg/s/degC, README) and no effect of the vocabulary is named; what is left is a residual
+    # correlated from burst to burst (Ljung-Box), no structure of a known shape
     assert report["selected_effects"] == []
-    assert report["unexplained"]["present"] is False
+    assert {w["test"] for w in report["unexplained"]["where"]} <= {"noise_correlation"}
     assert 0.2 < report["models"]["baseline"]["noise"]["arw"]["value"] < 0.6  # deg/sqrt(h), 3-digit quantised

@@ -43,6 +43,10 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0):
         "time": lambda: np.sin(np.pi * t / t[-1]) * np.sin(2.0 * np.pi * t / t[-1]),
         "step": lambda: (t > 0.4 * t[-1]).astype(float),
         "spectral_line": lambda: np.sin(2.0 * np.pi * t / 600.0),
+        # a tone whose period grows geometrically from 200 s to 800 s over the run (a chirp)
+        "moving_line": lambda: np.sin(2.0 * np.pi * t[-1] / (200.0 * np.log(4.0)) * (1.0 - 4.0 ** (-t / t[-1]))),
+        # random telegraph levels +-1/2, exponential dwell of 300 s mean
+        "noise_correlation": lambda: _telegraph(rng, n, 300.0),
     }
     if kind in shapes:
         x += amp * shapes[kind]()
@@ -51,6 +55,11 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0):
         blocks = np.repeat(rng.standard_normal(n // 10), 10) * amp * N / np.sqrt(10.0)
         x += np.where(t >= n // 2, blocks, 0.0)
     return t, x, temp
+
+
+def _telegraph(rng, n, dwell_s):
+    switches = np.cumsum(rng.exponential(dwell_s, size=int(4 * n / dwell_s) + 16))
+    return np.where(np.searchsorted(switches, np.arange(n), side="right") % 2 == 0, 0.5, -0.5)
 
 
 def _verdict(kind="none", amp=0.0, seed=0, terms=(), rrw=0.0):
@@ -82,6 +91,9 @@ def test_config_matches_defaults():
         ("time", 0.002, ("time", "step"), lambda w: w["time_s"][1] <= HOURS * 3600.0),
         ("step", 0.001, ("step",), lambda w: abs(np.mean(w["time_s"]) - 0.4 * HOURS * 3600.0) < 120.0),
         ("spectral_line", 0.0006, ("spectral_line",), lambda w: w["timescale_s"] == pytest.approx(600.0, rel=0.05)),
+        # the chirp's power is spread over the whole run's Fourier frequencies: found segment by segment
+        ("moving_line", 0.002, ("moving_line",), lambda w: 150.0 < w["timescale_s"][0] < w["timescale_s"][1] < 1000.0),
+        ("noise_correlation", 0.0015, ("noise_correlation",), lambda w: w["timescale_s"][0] == 10.0),
         ("noise_blocks", 2.0, ("noise_blocks",), lambda w: w["time_s"][0] >= HOURS * 3600.0 / 2.0 - 1.0),
         ("noise_samples", 1.5, ("noise_samples",), lambda w: w["time_s"][0] >= HOURS * 3600.0 / 2.0 - 1.0),
         ("noise_temperature", 2.0, ("noise_temperature", "noise_samples"), lambda w: w["test"] == "noise_samples" or w["temperature_c"][1] > 44.0),
@@ -176,3 +188,75 @@ def test_summary_never_calls_an_unexplained_recording_explained(selected):
     text = console.export_text()
     assert "explains the recording" not in text and "NOT EXPLAINED" in text
     assert "the baseline explains the recording" in to_markdown(_report(False, []))
+
+
+def _confirmed(shape, seed, terms, rrw=0.0):
+    """`confirm` on a pair of constructed runs with `shape(t)` [deg/s] added to both, starting from `terms`."""
+    from gyrocomp.diagnose.select import Search
+
+    scale, runs = None, []
+    for label, k in (("fit", seed), ("holdout", seed + 500)):
+        t, x, temp = _recording(k, rrw=rrw)
+        scale = scale or TemperatureScale.of(temp)
+        runs.append((label, Problem(Run(label, t, x + shape(t), temp, 1.0, 10, 60.0), DiagnoseSettings(), scale, 3)))
+    search = Search([runs[0][1]], [])
+    model = search.baseline
+    for term in terms:
+        model = extend(runs[0][1], model, term)
+    return ux.confirm(search, runs, model)
+
+
+def test_an_effect_standing_in_for_a_step_is_unlisted():
+    # a 3.6 deg/h step at 40 % of the run: a rate ramp takes part of it, but beside the step it gains nothing
+    model, v = _confirmed(lambda t: 0.001 * (t > 0.4 * t[-1]), 6, ("rate_ramp",))
+    assert model.order == ()
+    assert v["present"] and [u["effect"] for u in v["unlisted"]] == ["rate_ramp"]
+    assert v["unlisted"][0]["gain"] <= 10.0
+    assert any(w["test"] == "step" for w in v["where"])
+    assert any(h.startswith("rate_ramp is not listed") for h in v["hints"])
+
+
+def test_an_effect_that_earns_its_place_beside_the_step_stays():
+    # a ramp of 10 deg/h over the run plus the step: the ramp is a ramp, the step stays unexplained
+    model, v = _confirmed(lambda t: 0.001 * (t > 0.4 * t[-1]) + 0.003 * t / t[-1], 7, ("rate_ramp",))
+    assert model.order == ("rate_ramp",)
+    assert v["present"] and v["unlisted"] == []
+
+
+def test_a_noise_term_failing_its_signature_is_unlisted():
+    model, v = _confirmed(lambda t: 0.004 * (t > 0.4 * t[-1]), 5, ("rate_random_walk",))
+    assert "rate_random_walk" not in model.order
+    assert v["present"] and v["unlisted"][0]["effect"] == "rate_random_walk"
+    assert "signature" in v["unlisted"][0]["reason"]
+
+
+def test_an_explained_recording_is_left_alone():
+    # a true ramp and nothing else: the verdict is absent and confirm changes nothing
+    model, v = _confirmed(lambda t: 0.003 * t / t[-1], 8, ("rate_ramp",))
+    assert model.order == ("rate_ramp",)
+    assert not v["present"] and v["unlisted"] == []
+
+
+def _periodic_pair(seed, on_holdout):
+    """A 900 s sinusoid of 1.8 deg/h on the fit run, and on the holdout only when `on_holdout`; periodic fitted on the fit run."""
+    scale, problems = None, []
+    for k, amp in ((seed, 0.0005), (seed + 500, 0.0005 if on_holdout else 0.0)):
+        t, x, temp = _recording(k)
+        scale = scale or TemperatureScale.of(temp)
+        x = x + amp * np.sin(2.0 * np.pi * t / 900.0 + k)
+        problems.append(Problem(Run(str(k), t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), scale, 3))
+    return problems, extend(problems[0], fit_baseline(problems[0]), "periodic")
+
+
+def test_replication_finds_a_periodic_again_and_not_an_absent_one():
+    (fit, hold), model = _periodic_pair(9, True)
+    assert model.spec["periodic"]["period_s"] == pytest.approx(900.0, rel=0.02)
+    assert ux.replication(hold, model, "periodic") < 1e-6
+    (fit, hold), model = _periodic_pair(9, False)
+    assert ux.replication(hold, model, "periodic") > 0.01
+
+
+def test_replication_false_alarm_rate():
+    # absent on the holdout, the statistic is chi2_2: p uniform, below 0.05 in about 5 % of pairs
+    p = [ux.replication(_periodic_pair(s, False)[0][1], _periodic_pair(s, False)[1], "periodic") for s in range(30, 50)]
+    assert stats.kstest(p, "uniform").pvalue > 0.001
