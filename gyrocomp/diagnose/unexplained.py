@@ -675,7 +675,6 @@ class _Prepared:
         if name in self.columns:
             # The column with the largest score on its own: where the residual departs most from the model.
             k = self._strongest(self.columns[name])
-            j = int(np.argmax(self.columns[name][:, k]))
             mean_in = float(f_dh[self.columns[name][:, k] > 0].mean())
         if name == "temperature":
             inside = self.temp[self.columns[name][:, k] > 0]
