@@ -8,7 +8,7 @@ from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 
 from gyrocomp.models import ELM, NSGA2ELM
 from gyrocomp.models._base import block_split
-from gyrocomp.models.nsga2elm import _pick
+from gyrocomp.models.nsga2elm import _cv_rmse, _pick, _sign_test
 
 
 def oven_run(seed: int, n: int = 600, noise: float = 0.1, tau_s: float = 150.0):
@@ -58,35 +58,75 @@ def test_picked_member_is_the_refitted_estimator(fitted):
 
 
 def _plain_validation_rmse(model, X, y):
-    """Validation RMSE of the plain ELM (``ELM()`` with the search's weights) on the search's split."""
+    """Validation RMSE of the plain individual (``ELM()``'s hyper-parameters, the search's ridge and weights)."""
     train, val = block_split(len(y), model.validation_fraction, np.random.default_rng(model.seed))
-    plain = ELM(seed=model.elm_seed_).fit(X[train], y[train])
+    plain = ELM(ridge=model.ridge, seed=model.elm_seed_).fit(X[train], y[train])
     return np.sqrt(np.mean((plain.predict(X[val]) - y[val]) ** 2))
 
 
-@pytest.mark.parametrize("noise", [0.02, 0.1, 0.3])
-def test_pick_is_never_worse_than_the_plain_elm_on_validation(noise):
-    """The safe pick by construction (NSGA2ELM Notes): a front member only when >= min_gain better.
+def test_cross_validation_blocks_are_interleaved_into_folds():
+    """40 samples, 2 folds: 8 blocks of 5, fold 0 = blocks 0, 2, 4, 6; each block predicted by a fit on the other fold."""
+    rng = np.random.default_rng(0)
+    X, y = rng.uniform(-1, 1, (40, 2)), rng.normal(size=40)
+    params = {"n_hidden": 5, "activation": "sin", "weight_scale": 0.7}
+    fold0 = np.r_[0:5, 10:15, 20:25, 30:35]
+    fold1 = np.setdiff1d(np.arange(40), fold0)
+    prediction = np.empty(40)
+    for held, rest in ((fold0, fold1), (fold1, fold0)):
+        prediction[held] = ELM(5, "sin", 0.7, seed=3).fit(X[rest], y[rest]).predict(X[held])
+    expected = [np.sqrt(np.mean((prediction[j : j + 5] - y[j : j + 5]) ** 2)) for j in range(0, 40, 5)]
+    np.testing.assert_allclose(_cv_rmse(params, X, y, 2, 0.0, 3), expected, rtol=1e-12)
+    with pytest.raises(ValueError, match="cv_folds"):
+        _cv_rmse(params, X, y, 11, 0.0, 3)
 
-    Eight seeds per noise level, a small search (pop 10, 4 generations): the bound
-    does not depend on the search finding anything good. The plain ELM's validation
-    RMSE is recomputed here from the split and ``ELM()``.
+
+def test_sign_test_against_the_binomial_tail():
+    """P(at least w of 20 fair coin flips): 16 -> 6196/2^20 = 0.00591; ties and losses are not wins."""
+    plain = np.ones(20)
+    assert _sign_test(np.array([plain, np.r_[np.full(16, 0.9), np.full(4, 1.1)]])) == pytest.approx(6196 / 2**20)
+    assert _sign_test(np.array([plain, np.r_[np.full(15, 0.9), np.ones(5)]])) == pytest.approx(21700 / 2**20)
+    assert _sign_test(np.array([plain, plain])) == 1.0
+
+
+@pytest.mark.parametrize("noise", [0.02, 0.1, 0.3])
+def test_candidate_replaces_the_plain_elm_only_on_a_significant_sign_test(noise):
+    """The safe pick by construction (NSGA2ELM Notes, rules 1-3), eight seeds per noise level.
+
+    A small search (pop 10, 4 generations): the rule does not depend on the search
+    finding anything good. The plain ELM's validation RMSE and both rows of
+    ``cv_rmse_`` are recomputed here from the split, ``ELM()`` and the candidate.
     """
     kept = 0
     for seed in range(8):
         X, y, _ = oven_run(100 + seed, n=300, noise=noise)
         model = NSGA2ELM(pop_size=10, n_gen=4, seed=seed).fit(X, y)
-        plain = _plain_validation_rmse(model, X, y)
-        assert model.plain_rmse_ == pytest.approx(plain, rel=1e-9)
-        assert model.front_[0]["rmse"] <= plain * (1 + 1e-9)  # the plain ELM was in the population
+        assert model.plain_rmse_ == pytest.approx(_plain_validation_rmse(model, X, y), rel=1e-9)
+        assert model.front_[0]["rmse"] <= model.plain_rmse_ * (1 + 1e-9)  # the plain ELM was in the population
+        assert model.candidate_index_ == _pick(model.front_, "knee", model.rmse_tolerance)
+        candidate = {k: model.front_[model.candidate_index_][k] for k in ("n_hidden", "activation", "weight_scale")}
+        plain = {"n_hidden": 20, "activation": "sigmoid", "weight_scale": 1.0}
+        # the plain ELM is ELM() itself (Moore-Penrose); the candidate has the search's ridge
+        for row, (params, ridge) in enumerate(((plain, 0.0), (candidate, model.ridge))):
+            assert np.array_equal(model.cv_rmse_[row], _cv_rmse(params, X, y, 5, ridge, model.elm_seed_))
+        wins = int(np.sum(model.cv_rmse_[1] < model.cv_rmse_[0]))
+        est = model.estimator_
         if model.best_index_ is None:
-            est = model.estimator_
-            assert (est.n_hidden, est.activation, est.weight_scale) == (20, "sigmoid", 1.0)
+            assert (est.n_hidden, est.activation, est.weight_scale, est.ridge) == (20, "sigmoid", 1.0, 0.0)
+            assert wins < 16, seed  # 16 of 20 blocks: p = 0.0059 < alpha = 0.01
             kept += 1
         else:
-            assert model.front_[model.best_index_]["rmse"] < (1 - model.min_gain) * plain, seed
-    if noise == 0.02:
-        assert kept < 8  # a clean signal: the search does find better networks
+            assert model.best_index_ == model.candidate_index_
+            assert (est.n_hidden, est.activation, est.weight_scale, est.ridge) == (*candidate.values(), model.ridge)
+            assert wins >= 16, seed
+    # the plain ELM is the default: kept on 7 / 5 / 6 of these 8 seeds (noise 0.02 / 0.1 / 0.3) and on
+    # 27 / 23 / 23 of seeds 0-29; at a keep rate of 0.77, fewer than 3 of 8 has probability 0.3 %
+    assert kept >= 3
+
+
+def test_accept_always_deploys_the_candidate():
+    X, y, _ = oven_run(7, n=200)
+    model = NSGA2ELM(pop_size=8, n_gen=3, seed=2, accept="always").fit(X, y)
+    assert model.best_index_ == model.candidate_index_
 
 
 def smooth_function(X):
@@ -95,18 +135,19 @@ def smooth_function(X):
 
 
 @pytest.mark.parametrize("problem", ["cubic, noise 0.1", "smooth, noise 0.02"])
-def test_pick_is_not_worse_than_default_elm_on_held_out_runs(problem):
+def test_pick_is_not_worse_than_the_default_elm_on_held_out_runs(problem):
     """Train on one oven run, test on another with a faster chamber, 8 seeds, the configured search.
 
-    A statistic, not one seed: one seed's pick is only as good as the CPU that rounds
-    it (issue #20, where the knee came out 4.8x a default ELM). Pick / default-ELM
-    held-out RMSE (default: mean over ELM seeds 0-9), measured here over these 8
-    seeds: cubic drift with noise 0.1 (validation RMSE mostly noise), 0.85-1.37,
-    median 1.01; the smooth function with noise 0.02, 0.33-1.17, median 0.45. The
-    default ELMs themselves spread up to 1.3x their mean. Bounds: the median (robust
-    to one seed's draw) at 1.15 and 0.6, no seed at 2x (the degenerate picks of
-    issue #20). benchmarks/nsga2elm_pick.py gives the distribution over 50 seeds on
-    three problems.
+    A statistic over seeds, not one seed: one seed's front is only as good as the CPU
+    that rounds it (issue #20, where the knee came out 4.8x a default ELM). The
+    default ELM is ``ELM()`` with the pick's random weights (``ELM(seed=elm_seed_)``),
+    trained on the same run: what NSGA2ELM returns when it keeps the plain ELM.
+    Pick / default held-out RMSE measured over these 8 seeds (tuning seeds 0-7 of
+    benchmarks/nsga2elm_pick.py): cubic drift with noise 0.1, 1.0 on all 8 (the plain
+    ELM kept); smooth function with noise 0.02, 0.34-1.0, median 0.57. Over 50 tuning
+    seeds the worst is 1.0 on both, over 50 check seeds 1.08 and 1.0, the medians
+    1.0 and 0.58-0.72. Bounds: no seed above 1.1 (issue #20's goal), medians at 1.02
+    (the plain ELM kept or a better candidate) and 0.8.
     """
     ratios = []
     for seed in range(8):
@@ -120,11 +161,35 @@ def test_pick_is_not_worse_than_default_elm_on_held_out_runs(problem):
         def error(model):
             return np.sqrt(np.mean((model.predict(X_test) - target) ** 2))
 
-        default = np.mean([error(ELM(seed=s).fit(X, y)) for s in range(10)])
-        ratios.append(error(NSGA2ELM(seed=seed).fit(X, y)) / default)
-    assert max(ratios) < 2.0, np.round(ratios, 3)
+        model = NSGA2ELM(seed=seed).fit(X, y)
+        ratios.append(error(model) / error(ELM(seed=model.elm_seed_).fit(X, y)))
+    assert max(ratios) <= 1.1, np.round(ratios, 3)
     # where the search has something to find (smooth), it finds it; where not, it costs nothing
-    assert np.median(ratios) < (0.6 if problem.startswith("smooth") else 1.15), np.round(ratios, 3)
+    assert np.median(ratios) < (0.8 if problem.startswith("smooth") else 1.02), np.round(ratios, 3)
+
+
+def test_a_round_off_change_of_the_inputs_keeps_the_front_and_the_model():
+    """Inputs times 1 + 1e-12 u, eight seeds, a small search on the smooth drift (NSGA2ELM Notes, stability).
+
+    Measured with the candidates' ridge of 1e-10: the same front on 8 of 8 seeds,
+    predictions moved by at most 8.3e-10 of std(y). With ridge 0 (Moore-Penrose
+    candidates) the same check gave the same front on 5 of 8 and moves up to 3.4e-5:
+    this test fails there. Bounds: 7 of 8 (one near-tie of two objectives may fall
+    either way on another CPU) and 1e-7, 100x the measured move.
+    """
+    same, moved = 0, []
+    for seed in range(8):
+        X, y, _ = oven_run(200 + seed, n=300)
+        y = smooth_function(X) + np.random.default_rng(seed).normal(0, 0.02, len(X))
+        X_moved = X * (1 + 1e-12 * np.random.default_rng(seed).uniform(-1, 1, X.shape))
+        a = NSGA2ELM(pop_size=20, n_gen=6, seed=seed).fit(X, y)
+        b = NSGA2ELM(pop_size=20, n_gen=6, seed=seed).fit(X_moved, y)
+        members = [[(m["n_hidden"], m["activation"], m["weight_scale"]) for m in fit.front_] for fit in (a, b)]
+        if members[0] == members[1] and a.best_index_ == b.best_index_:
+            same += 1
+            moved.append(np.max(np.abs(a.predict(X) - b.predict(X))) / np.std(y))
+    assert same >= 7
+    assert max(moved) < 1e-7, moved
 
 
 def test_same_seed_same_front():
@@ -163,7 +228,8 @@ def test_plain_elm_is_in_the_initial_population():
                                            ({"hidden_range": (0, 50)}, "hidden_range"),
                                            ({"activations": ("relu",)}, "activations"),
                                            ({"pick": "best"}, "pick"), ({"rmse_tolerance": -0.1}, "rmse_tolerance"),
-                                           ({"min_gain": 1.5}, "min_gain"),
+                                           ({"accept": "sometimes"}, "accept"), ({"cv_folds": 1}, "cv_folds"),
+                                           ({"alpha": 0.0}, "alpha"),
                                            ({"validation_fraction": 0.0}, "validation_fraction")])
 def test_invalid_parameters_name_themselves(params, name):
     X, y, _ = oven_run(0, n=50)
