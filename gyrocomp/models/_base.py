@@ -27,8 +27,13 @@ from gyrocomp.errors import GyrocompError, InputError
 PREDICT_ROWS = 1 << 16
 """Rows evaluated at once by :meth:`Learner.predict` (ANFIS with 25 rules: 13 MB of firing strengths)."""
 
-FORMAT_VERSION = 1
-"""Version of the ``to_dict`` layout; :meth:`Learner.from_dict` refuses newer ones."""
+FORMAT_VERSION = 2
+"""Version of the ``to_dict`` layout; :meth:`Learner.from_dict` refuses newer ones.
+
+2: NSGA-II-ELM's pick became a cross-validated sign test (``accept``, ``cv_folds``,
+``alpha``, fitted ``cv_rmse_``), replacing the validation margin ``min_gain`` of 1.
+Every other kind reads the same in 1 and 2.
+"""
 
 
 class NotFittedError(GyrocompError, ValueError, AttributeError):
@@ -46,10 +51,12 @@ class Learner(abc.ABC):
     ``_fitted`` (names of the learned attributes, all ending in ``_``),
     ``_arrays`` (those of them that are float arrays) and ``_may_be_empty``
     (those arrays that may legitimately hold nothing, such as a history that
-    was not recorded), and implement :meth:`_check_loaded`.
+    was not recorded), and implement :meth:`_check_loaded`. ``first_version``
+    is the oldest ``to_dict`` layout of that kind :meth:`from_dict` reads.
     """
 
     kind: str = ""
+    first_version: int = 1
     _fitted: tuple[str, ...] = ()
     _arrays: frozenset[str] = frozenset()
     _may_be_empty: frozenset[str] = frozenset()
@@ -159,6 +166,12 @@ class Learner(abc.ABC):
         version = d.get("version")
         if not isinstance(version, int) or version > FORMAT_VERSION:
             raise InputError(f"{cls.__name__}.from_dict: unsupported `version` {version!r}")
+        if version < cls.first_version:
+            raise InputError(
+                f"{cls.__name__}.from_dict: `version` {version} was written by an older gyrocomp, "
+                f"whose {cls.kind} layout this one no longer reads (it reads {cls.first_version} to "
+                f"{FORMAT_VERSION}); train the model again"
+            )
         params = d.get("params")
         if not isinstance(params, dict):
             raise InputError(f"{cls.__name__}.from_dict: `params` missing")

@@ -197,6 +197,7 @@ class NSGA2ELM(Learner):
     """
 
     kind = "nsga2elm"
+    first_version = 2
     _fitted = (
         "n_features_in_", "front_", "candidate_index_", "best_index_", "plain_rmse_", "cv_rmse_", "p_value_",
         "elm_seed_", "estimator_",

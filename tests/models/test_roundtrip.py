@@ -123,3 +123,14 @@ def test_sklearn_clone_works():
 
     model = ANFIS(n_mfs=(3, 2), epochs=4)
     assert clone(model).get_params() == model.get_params()
+
+
+def test_from_dict_reads_older_layouts_only_where_they_did_not_change():
+    """Layout 1 of an ELM still loads; layout 1 of NSGA-II-ELM (``min_gain``) asks for retraining."""
+    elm = ELM(n_hidden=5, seed=0).fit(X_NORM, Y)
+    d = json.loads(json.dumps(elm.to_dict()))
+    d["version"] = 1
+    np.testing.assert_array_equal(ELM.from_dict(d).predict(X_NORM), elm.predict(X_NORM))
+    old = {"kind": "nsga2elm", "version": 1, "params": {"min_gain": 0.1}, "fitted": None}
+    with pytest.raises(InputError, match=r"older gyrocomp.*train the model again"):
+        NSGA2ELM.from_dict(old)
