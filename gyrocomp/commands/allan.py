@@ -6,11 +6,14 @@ import dataclasses
 import math
 import os
 from pathlib import Path
-from typing import Iterator, Optional, Sequence
+from typing import TYPE_CHECKING, Iterator, Optional, Sequence
 
 from gyrocomp.commands import guarded
 from gyrocomp.errors import InputError
 from gyrocomp.recordings import ColumnSpec
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = ["Options", "to_files", "check"]
 
