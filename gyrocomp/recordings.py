@@ -87,6 +87,9 @@ COMPRESSIONS = (".gz", ".bz2", ".xz", ".zst", ".zip")
 PLAUSIBLE_DEGC = (-100.0, 200.0)
 """Temperatures outside this range are refused as a probable unit mistake."""
 
+_CHECK_ROWS = 1 << 16
+"""Samples a per-sample check looks at at a time, so that its temporaries stay this small whatever the recording's length."""
+
 
 def _entries(value: str | Sequence[str]) -> tuple[str, ...]:
     """The comma-separated entries of an option (or the items of a sequence), stripped."""
@@ -716,8 +719,10 @@ def _kind(name: str) -> str:
 def _read_table(name: str, kind: str, spec: ColumnSpec, usecols: Sequence[str] | None):
     """Frame (or arrays), Parquet metadata, SHA-256 and row naming of a CSV or Parquet file.
 
-    A file is hashed by streaming and parsed from its path (Parquet
-    memory-mapped), so its bytes are never held in memory twice.
+    A file is hashed by streaming and parsed from its path, so its bytes
+    are never held in memory twice. Parquet is not memory-mapped: the pages
+    of a mapped file count in the process' resident memory, about the
+    file's size on top of the columns decoded from it.
     """
     if name == "-":
         source = sys.stdin.buffer.read()
@@ -851,12 +856,13 @@ def _parse_parquet(name: str, source: str | bytes, usecols: Callable | None) -> 
         if isinstance(source, bytes):
             table = pq.read_table(pa.BufferReader(source))
         else:
-            parquet = pq.ParquetFile(source, memory_map=True)
+            parquet = pq.ParquetFile(source, memory_map=False)
             names = [c for c in parquet.schema_arrow.names if usecols is None or usecols(c)]
             arrays = _parquet_arrays(parquet, names)
+            pa.default_memory_pool().release_unused()  # the row groups' buffers, kept by Arrow's allocator for reuse
             if arrays is not None:
                 return arrays, parquet_header(name, parquet.schema_arrow.metadata)
-            table = pq.read_table(source, columns=names, memory_map=True)
+            table = pq.read_table(source, columns=names, memory_map=False)
     except (pa.ArrowInvalid, OSError) as err:
         raise InputError(f"{name}: not a readable Parquet file ({err})") from None
     return table.to_pandas(), parquet_header(name, table.schema.metadata)
@@ -991,9 +997,8 @@ def _check_order(out: dict, spec: ColumnSpec, locate) -> tuple[dict, np.ndarray 
     kept) and the notes.
     """
     time = out["time"]
-    dt = np.diff(time)
-    back = np.flatnonzero(dt < 0)
-    same = np.flatnonzero(dt == 0)
+    back = _where_intervals(time, lambda dt: dt < 0)
+    same = _where_intervals(time, lambda dt: dt == 0)
     if back.size and (not same.size or back[0] < same[0] or spec.dedupe is not None):
         i = int(back[0]) + 1
         raise InputError(
@@ -1009,7 +1014,7 @@ def _check_order(out: dict, spec: ColumnSpec, locate) -> tuple[dict, np.ndarray 
             f"{float(time[i - 1])!r}; time must be strictly increasing "
             f"({same.size} duplicate stamps; --dedupe first|mean merges them)"
         )
-    starts = np.flatnonzero(np.r_[True, dt != 0])
+    starts = np.flatnonzero(np.r_[True, np.diff(time) != 0])
     if spec.dedupe == "first":
         merged = {key: values[starts] for key, values in out.items()}
     else:
@@ -1074,16 +1079,18 @@ def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, res
     n = len(time)
     if n < 2:
         return out, [slice(0, n)], []
-    dt = np.diff(time)
     slack = 1e-9 * nominal  # an interval exactly at the tolerance (ms stamps: 10 or 30 ms at 20 ms) is within it
-    short = np.flatnonzero(dt < (1.0 - tolerance) * nominal - slack)
-    long = np.flatnonzero(dt > (1.0 + tolerance) * nominal + slack)
+    short = _where_intervals(time, lambda dt: dt < (1.0 - tolerance) * nominal - slack)
+    long = _where_intervals(time, lambda dt: dt > (1.0 + tolerance) * nominal + slack)
+
+    def dt(i: np.ndarray) -> np.ndarray:
+        return time[i + 1] - time[i]
     if not short.size and not long.size:
         return out, [slice(0, n)], []
     if resample:
         note = (
             f"resampled onto a uniform {nominal:.6g} s grid: {long.size} gaps filled by linear "
-            f"interpolation, the longest {float(dt[long].max()):.6g} s"
+            f"interpolation, the longest {float(dt(long).max()):.6g} s"
             if long.size
             else f"resampled onto a uniform {nominal:.6g} s grid: no gap, {short.size} short intervals"
         )
@@ -1091,14 +1098,14 @@ def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, res
         return out, [slice(0, len(out["time"]))], [note]
     if short.size or not allow_gaps:
         candidates = short if allow_gaps else np.r_[short, long]
-        worst = int(candidates[np.argmax(np.abs(dt[candidates] - nominal))])
+        worst = int(candidates[np.argmax(np.abs(dt(candidates) - nominal))])
         raise InputError(
-            f"{locate(worst + 1)}: sampling interval {float(dt[worst]):.6g} s in `{src}`, the median is "
+            f"{locate(worst + 1)}: sampling interval {float(time[worst + 1] - time[worst]):.6g} s in `{src}`, the median is "
             f"{nominal:.6g} s (tolerance {tolerance:.0%}); pass --resample to interpolate onto a uniform grid"
         )
     bounds = np.r_[0, long + 1, n]
     segments = [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
-    return out, segments, [gap_note(long.size, float(dt[long].max()))]
+    return out, segments, [gap_note(long.size, float(dt(long).max()))]
 
 
 def gap_note(n_gaps: int, longest_s: float) -> str:
@@ -1130,9 +1137,9 @@ def _numeric_column(series: pd.Series | np.ndarray, src: str, locate) -> np.ndar
         if not pd.api.types.is_numeric_dtype(series.dtype) or pd.api.types.is_bool_dtype(series.dtype):
             raise InputError(f"{locate(0)}: `{src}` is not numeric (type {series.dtype})")
         values = series.to_numpy(dtype=float)
-    finite = np.isfinite(values)
-    if not finite.all():
-        i = int(np.flatnonzero(~finite)[0])
+    bad = _where(values, lambda v: ~np.isfinite(v))
+    if bad.size:
+        i = int(bad[0])
         what = "missing or NaN" if np.isnan(values[i]) else f"{float(values[i])!r}"
         raise InputError(f"{locate(i)}: `{src}` is {what}")
     return values
@@ -1142,7 +1149,7 @@ def _numeric_extra(series: pd.Series | np.ndarray) -> np.ndarray | None:
     """A further column as float64 when every cell is a number (infinity included), else None."""
     if isinstance(series, np.ndarray):
         values = series.astype(float, copy=False)
-        return None if np.isnan(values).any() else values
+        return None if _where(values, np.isnan).size else values
     import pandas as pd
 
     col = pd.to_numeric(series, errors="coerce")
@@ -1152,9 +1159,9 @@ def _numeric_extra(series: pd.Series | np.ndarray) -> np.ndarray | None:
 def _check_axis(values: np.ndarray, src: str, canonical: str, unit: str, factor: float, locate) -> None:
     """Refuse an axis reading beyond :class:`AxisLimits` (in the file's unit)."""
     bound = AxisLimits().bound(canonical)
-    outside = np.abs(values) > bound
-    if outside.any():
-        i = int(np.flatnonzero(outside)[0])
+    outside = _where(values, lambda v: np.abs(v) > bound)
+    if outside.size:
+        i = int(outside[0])
         raise InputError(
             f"{locate(i)}: `{src}` = {values[i] / factor:g} {unit} is beyond +-{bound / factor:g} {unit}, "
             "more than any sensor reads (configs/recordings.toml [axes]); a corrupt cell or the wrong --rate-unit?"
@@ -1163,13 +1170,34 @@ def _check_axis(values: np.ndarray, src: str, canonical: str, unit: str, factor:
 
 def _check_temperature(temperature: np.ndarray, src: str, locate) -> None:
     lo, hi = PLAUSIBLE_DEGC
-    outside = (temperature < lo) | (temperature > hi)
-    if outside.any():
-        i = int(np.flatnonzero(outside)[0])
+    outside = _where(temperature, lambda t: (t < lo) | (t > hi))
+    if outside.size:
+        i = int(outside[0])
         raise InputError(
             f"{locate(i)}: `{src}` = {temperature[i]:g} degC is outside "
             f"[{lo:g}, {hi:g}] degC; wrong unit? (pass --temp-unit K for kelvin)"
         )
+
+
+def _where(values: np.ndarray, test: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """Indices where the element-wise `test` holds, evaluated :data:`_CHECK_ROWS` samples at a time.
+
+    Same as ``np.flatnonzero(test(values))``, without its temporaries the
+    size of the whole column.
+    """
+    hits = [start + np.flatnonzero(test(values[start : start + _CHECK_ROWS])) for start in range(0, len(values), _CHECK_ROWS)]
+    return np.concatenate(hits) if hits else np.empty(0, dtype=np.intp)
+
+
+def _where_intervals(time: np.ndarray, test: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """Indices ``i`` where `test` holds for the interval ``time[i + 1] - time[i]``, :data:`_CHECK_ROWS` at a time.
+
+    Same as ``np.flatnonzero(test(np.diff(time)))``, without a full-length
+    array of intervals.
+    """
+    n = len(time) - 1
+    hits = [start + np.flatnonzero(test(np.diff(time[start : start + _CHECK_ROWS + 1]))) for start in range(0, n, _CHECK_ROWS)]
+    return np.concatenate(hits) if hits else np.empty(0, dtype=np.intp)
 
 
 def _own(values: np.ndarray, owned: bool) -> np.ndarray:
