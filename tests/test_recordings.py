@@ -266,3 +266,42 @@ def test_command_line_time_bases_and_compression(tmp_path):
     ok = CliRunner().invoke(app, ["allan", str(iso), "--out", str(out), "-q"])
     assert ok.exit_code == 0, ok.output
     assert fs_us == pd.read_json(out, typ="series")["series"][0]["fs_hz"] == pytest.approx(fs)
+
+
+@pytest.mark.parametrize("at", [1, 65_535, 65_536, 65_537, 150_000, 199_999])
+def test_checks_in_chunks_name_the_row_past_the_first_chunk(at):
+    """The per-sample checks look at 65 536 samples at a time: a defect anywhere, on either side of a chunk's edge, is named by its row."""
+    n = 200_000
+    base = {"time": np.arange(n) / 1000.0, "rate": np.zeros(n), "temperature": np.full(n, 25.0)}
+
+    def refused(column, value):
+        arrays = {k: v.copy() for k, v in base.items()}
+        arrays[column][at] = value
+        with pytest.raises(InputError) as err:
+            recordings.recording_from_frame(arrays, name="long")
+        return str(err.value)
+
+    assert refused("rate", np.nan).startswith(f"long row {at + 1}: `rate` is missing or NaN")
+    assert refused("rate", 2e5).startswith(f"long row {at + 1}: `rate` = 200000 deg/s is beyond")
+    assert refused("temperature", 300.0).startswith(f"long row {at + 1}: `temperature` = 300 degC is outside")
+    assert refused("time", base["time"][at - 1] - 1.0).startswith(f"long row {at + 1}: `time` = ")
+    assert "goes back" in refused("time", base["time"][at - 1] - 1.0)
+    assert refused("time", base["time"][at - 1]).startswith(f"long row {at + 1}: `time` = {float(base['time'][at - 1])!r} duplicates")
+    jitter = refused("time", base["time"][at] - 0.0009) if at < n - 1 else None
+    if jitter is not None:
+        assert jitter.startswith(f"long row {at + 1}: sampling interval 0.0001 s in `time`")
+
+
+def test_gaps_and_duplicates_across_chunks_are_counted_whole():
+    n = 200_000
+    time = np.arange(n) / 1000.0
+    time[[65_536, 140_000]] = time[[65_535, 139_999]]  # two duplicates, one at a chunk's edge
+    arrays = {"time": time, "rate": np.zeros(n)}
+    with pytest.raises(InputError, match=r"long row 65537: .*\(2 duplicate stamps;"):
+        recordings.recording_from_frame(arrays, name="long")
+    gapped = np.arange(n) / 1000.0
+    gapped[65_536:] += 1.0
+    gapped[150_000:] += 2.5
+    with pytest.warns(recordings.RecordingNote, match="3 segments: 2 gaps, the longest 2.501 s"):
+        rec = recordings.recording_from_frame({"time": gapped, "rate": np.zeros(n)}, name="long", allow_gaps=True)
+    assert [(s.start, s.stop) for s in rec.segments] == [(0, 65_536), (65_536, 150_000), (150_000, n)]
