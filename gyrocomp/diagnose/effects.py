@@ -11,7 +11,7 @@ effect          columns                                     nonlinear parameter 
 ==============  ==========================================  ======================  ==========
 baseline        1, T~, T~^2, T~^3 (T~ scaled temperature)   --                      --
 thermal_lag     the polynomial in the element temperature    ``tau_s`` (grid)        follows a lagged T: transients that decay with tau after a step
-temp_rate       dT/dt, |dT/dt| (heating and cooling apart)  --                      proportional to dT/dt, zero in a soak
+temp_rate       dT/dt [and |dT/dt|: heat, cool apart]     form (lowest BIC)       proportional to dT/dt, zero in a soak
 hysteresis      heating/cooling branch (+1/-1), power-on    ``deadband_c`` (grid)   offset by last direction, kept through a soak
 warmup          exp(-(t - t0) / tau)                        ``tau_s`` (grid)        one decay from power-on
 rate_ramp       t - t0                                      --                      straight line in time

@@ -134,15 +134,16 @@ def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
         # one (a warm-up fitted alone stretches its tau over a ramp): refit
         # each with the new effect in (one coordinate-descent pass).
         for other in current.spec:
-            if KINDS[other].nonlinear:
+            if KINDS[other].nonlinear or KINDS[other].forms:
                 trial = dataclasses.replace(current, spec=spec)
                 spec[other] = _best_nonlinear(problem, trial, other)
     else:
         stochastic.append(effect)
     Xb, names = problem.design_blocks(spec)
     noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, current.noise, ("arw",) + tuple(stochastic))
-    k = current.n_params + KINDS[effect].n_params
-    return Fitted(current.order + (effect,), spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
+    order = current.order + (effect,)
+    k = current.n_params + _n_params(order, spec) - _n_params(current.order, current.spec)
+    return Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
 
 
 def holdout_fit(problem: Problem, model: Fitted):
@@ -408,12 +409,24 @@ def _refit(problem: Problem, baseline: Fitted, order: tuple, spec: dict, noise: 
             values[e] = 0.0
     Xb, names = problem.design_blocks(spec)
     noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, NoiseModel(**values), ("arw",) + stochastic)
-    k = baseline.n_params + sum(KINDS[e].n_params for e in order[len(baseline.order) :])
+    k = baseline.n_params + _n_params(order[len(baseline.order) :], spec)
     return Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
+
+
+def _n_params(effects, spec: dict) -> int:
+    """Free parameters of `effects` on one run, each in its fitted form (:meth:`~gyrocomp.sim.vocabulary.Effect.n_params_of`)."""
+    return sum(KINDS[e].n_params_of(spec.get(e, {})) for e in effects)
 
 
 def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_problems=()) -> dict:
     """Grid search (then bounded refinement in log scale) of the effect's nonlinear parameter.
+
+    An effect with nested :attr:`~gyrocomp.sim.vocabulary.Effect.forms`
+    instead takes the form of lowest BIC, ``-2 log L + k ln n`` with ``k``
+    its parameter count and ``n`` the blocks of the runs: a richer form's
+    extra columns earn their place like an effect's (a temperature-rate
+    asymmetry that is not there must not charge a symmetric sensitivity
+    a parameter its look-alike, a short thermal lag, does not pay).
 
     Every parameter is refined between the grid's neighbours of the best
     point, the hysteresis deadband too: a relay's switching width is
@@ -429,14 +442,20 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_probl
     """
     s = problem.settings
     run = problem.run
-    key = KINDS[effect].nonlinear
-    if not key:
+    kind = KINDS[effect]
+    key = kind.nonlinear
+    if not key and not kind.forms:
         return {}
     length_s = run.n_blocks * run.block_s
     parts = [_JointPart(problem, current, effect)] + [_JointPart(p, m, effect) for p, m in others_problems]
 
     def deviance(params):
         return float(_joint_deviance(parts, params, effect).sum())
+
+    if not key:
+        log_n = np.log(sum(part.y_w.size for part in parts))
+        bic = [deviance(form) + kind.n_params_of(form) * log_n for form in kind.forms]
+        return dict(kind.forms[int(np.argmin(bic))])
 
     grid = KINDS[effect].grid(s, length_s, run.block_s)
     if effect == "periodic":

@@ -330,7 +330,7 @@ def gain_beside(problem, model, effect, G):
     else:
         Xm = problem.design_blocks({k: v for k, v in model.spec.items() if k != effect})[0]
         less = fit_noise(y, np.hstack([Xm, G]), basis, model.noise, free)[1]
-    return float(less - full - KINDS[effect].n_params * np.log(y.size))
+    return float(less - full - KINDS[effect].n_params_of(model.spec.get(effect, {})) * np.log(y.size))
 
 
 def _verdict(runs, model, settings, baseline_residuals, signature_settings):

@@ -24,7 +24,8 @@ added to it.
 effect              nonlinear param     grid (configs/diagnose)    temperature
 ==================  ==================  =========================  ============
 thermal_lag         ``tau_s``           ``thermal_lag_tau_s``      yes
-temp_rate           --                  --                         yes
+temp_rate           (form: symmetric    --                         yes
+                    or asymmetric)
 hysteresis          ``deadband_c``      ``hysteresis_deadband_c``  yes
 warmup              ``tau_s``           ``warmup_tau_s``           no
 rate_ramp           --                  --                         no

@@ -31,13 +31,20 @@ class Effect(abc.ABC):
         The ``[diagnose]`` setting (:class:`gyrocomp.diagnose.DiagnoseSettings`)
         holding that grid.
     n_params : int
-        Free parameters on one run (a grid-searched one counts as one).
+        Free parameters on one run (a grid-searched one counts as one); of
+        the plainest form when the effect has :attr:`forms`.
     per_run : tuple of str
         Design columns re-estimated on every run (an interference phase).
     unit_columns : int or None
         How many leading columns make the unit shape of the reported
         amplitude (:meth:`amplitude`; detection limits); None: all of them,
         averaged (a sinusoid's phases).
+    forms : tuple of dict
+        Nested forms, plainest first, as ``params`` of :meth:`columns`
+        (``temp_rate``: one sensitivity, then heating and cooling apart),
+        for an effect without a nonlinear parameter. The diagnosis fits the
+        form of lowest BIC (:meth:`n_params_of` counts its parameters): a
+        richer form's extra columns must earn their place like an effect.
     """
 
     name: str = ""
@@ -49,6 +56,7 @@ class Effect(abc.ABC):
     n_params: int = 1
     per_run: tuple = ()
     unit_columns: int | None = None
+    forms: tuple = ()
 
     def __repr__(self):
         return f"<effect {self.name}>"
@@ -61,6 +69,10 @@ class Effect(abc.ABC):
         (5, 2)
         """
         return self.n_params + len(self.per_run) * (n_runs - 1)
+
+    def n_params_of(self, params: dict) -> int:
+        """Free parameters on one run of the form `params` (:attr:`forms`); :attr:`n_params` without forms."""
+        return self.n_params
 
     def bias(self, time_s, housing_c, gyro) -> np.ndarray:
         """The simulated bias contribution [deg/s] of a deterministic effect.

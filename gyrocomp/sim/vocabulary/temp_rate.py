@@ -27,19 +27,29 @@ class TempRate:
 
 
 class _TempRate(Effect):
-    """Columns: dT/dt of the measured temperature (Savitzky-Golay, ``run.rate_smooth_s``) and its magnitude; zero in a soak.
+    """Columns: dT/dt of the measured temperature (Savitzky-Golay, ``run.rate_smooth_s``), and in the asymmetric form its magnitude; zero in a soak.
 
     The two columns span every pair of heating and cooling sensitivities:
     ``g_heat max(dT/dt, 0) + g_cool min(dT/dt, 0) = g dT/dt + a |dT/dt|``
     with ``g = (g_heat + g_cool) / 2`` and ``a = (g_heat - g_cool) / 2``.
-    The amplitude of a detection limit is that of the first (symmetric) one.
+    The symmetric form (``a = 0``, one parameter) is the plainer of the two
+    :attr:`forms`: the asymmetry is fitted only where its column earns its
+    place by the BIC. Charged for an unused column, a symmetric sensitivity
+    loses to its look-alike, a short thermal lag (one parameter,
+    ``P(T - tau dT/dt) ~ P(T) - tau P'(T) dT/dt``). The amplitude of a
+    detection limit is that of the first (symmetric) column.
     """
 
     name = "temp_rate"
     settings = TempRate
     needs_temperature = True
-    n_params = 2
+    n_params = 1
     unit_columns = 1
+    forms = ({"asymmetric": False}, {"asymmetric": True})
+
+    def n_params_of(self, params):
+        """1 symmetric, 2 with heating and cooling apart (``params["asymmetric"]``, default True)."""
+        return self.n_params + bool(params.get("asymmetric", True))
 
     def bias(self, time_s, housing_c, gyro):
         t = gyro.temp_rate
@@ -48,11 +58,14 @@ class _TempRate(Effect):
 
     def columns(self, run, params, poly_degree=3, scale=None):
         rate = shapes.temperature_rate(run.time_s, run.temperature_c, smooth_s=run.rate_smooth_s)
+        if not params.get("asymmetric", True):
+            return rate[:, None], [self.name]
         return np.column_stack([rate, np.abs(rate)]), [self.name, f"{self.name}_asymmetry"]
 
     def report(self, coef, params, noise):
+        """The sensitivity and its asymmetry (0 in the symmetric form)."""
         return self.amplitude(coef[self.name]) | {
-            "asymmetry_dps_per_c_per_s": {"value": coef[f"{self.name}_asymmetry"], "unit": "deg/s per degC/s"}
+            "asymmetry_dps_per_c_per_s": {"value": coef.get(f"{self.name}_asymmetry", 0.0), "unit": "deg/s per degC/s"}
         }
 
     def amplitude(self, value):
