@@ -94,6 +94,9 @@ class DiagnoseSettings:
     hysteresis_deadband_c: tuple = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
     periodic_min_blocks: float = 4.0
     periodic_oversample: float = 3.0
+    periodic_harmonics: int = 8
+    periodic_harmonic_min_cycles: float = 4.0
+    periodic_harmonic_min_blocks: float = 2.0
     gap_block_s: float = 100.0
     gap_min_windows: int = 16
     smooth_s: float = 100.0
@@ -104,7 +107,8 @@ class DiagnoseSettings:
     emd_max_sift: int = 50
 
     def __post_init__(self):
-        for name in ("block_s", "max_rate_hz", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks", "temperature_bin_c"):
+        for name in ("block_s", "max_rate_hz", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks",
+                     "periodic_harmonic_min_cycles", "periodic_harmonic_min_blocks", "temperature_bin_c"):
             if not getattr(self, name) > 0:
                 raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be > 0")
         if not 0 <= self.poly_degree <= 3:
@@ -113,6 +117,8 @@ class DiagnoseSettings:
             raise InputError(f"diagnose.detection_power = {self.detection_power!r} must be between 0 and 1")
         if self.tau_grid_points < 2:
             raise InputError(f"diagnose.tau_grid_points = {self.tau_grid_points!r} must be at least 2 (a grid from lo to hi)")
+        if self.periodic_harmonics < 1:
+            raise InputError(f"diagnose.periodic_harmonics = {self.periodic_harmonics!r} must be at least 1 (the sinusoid)")
         if self.max_blocks < 16:
             raise InputError(f"diagnose.max_blocks = {self.max_blocks!r} must be at least 16")
 

@@ -15,12 +15,12 @@ temp_rate       dT/dt [and |dT/dt|: heat, cool apart]     form (lowest BIC)     
 hysteresis      heating/cooling branch (+1/-1), power-on    ``deadband_c`` (grid)   offset by last direction, kept through a soak
 warmup          exp(-(t - t0) / tau)                        ``tau_s`` (grid)        one decay from power-on
 rate_ramp       t - t0                                      --                      straight line in time
-periodic        sin, cos (2 pi t / P)                       ``period_s`` (grid)     fixed period, unrelated to T
+periodic        sin, cos (2 pi k t / P), k = 1..H           ``period_s`` (grid), H  fixed period, unrelated to T
 ==============  ==========================================  ======================  ==========
 
 The stochastic effects (``bias_instability``, ``rate_random_walk``) are
 terms of the noise covariance (:mod:`gyrocomp.diagnose.likelihood`), not
-columns. The per-run offset, for ``periodic`` the phase and for ``hysteresis``
+columns. The per-run offset, for ``periodic`` the phase (every harmonic's) and for ``hysteresis``
 the level before the first excursion beyond the deadband (the branch the part
 was left in before power-on) are re-estimated
 on every run (a power-on constant and an interference phase are not
@@ -55,14 +55,14 @@ __all__ = [
 ]
 
 
-def n_params_runs(effect: str, n_runs: int) -> int:
-    """Free parameters `effect` adds when fitted on `n_runs` runs together
+def n_params_runs(effect: str, n_runs: int, params=None) -> int:
+    """Free parameters `effect` adds at nonlinear parameters `params` when fitted on `n_runs` runs together
     (:meth:`gyrocomp.sim.vocabulary.Effect.n_params_runs`).
 
     >>> n_params_runs("periodic", 2), n_params_runs("warmup", 2)
     (5, 2)
     """
-    return KINDS[effect].n_params_runs(n_runs)
+    return KINDS[effect].n_params_runs(n_runs, params)
 
 
 
@@ -161,20 +161,28 @@ def effect_columns(run: Run, effect: str, params: dict, poly_degree=3, scale=Non
     return KINDS[effect].columns(run, params, poly_degree, scale)
 
 
-def periodic_block_means(run: Run, period_s):
-    """Block means of ``sin`` and ``cos(2 pi t / P)``, in closed form.
+def periodic_block_means(run: Run, period_s, harmonics: int = 1):
+    """Block means of ``sin`` and ``cos(2 pi k t / P)``, ``k = 1..harmonics``, in closed form.
 
-    For ``m`` samples ``t_c + (k - (m-1)/2) h`` the mean of ``exp(i w t)`` is
+    For ``m`` samples ``t_c + (j - (m-1)/2) h`` the mean of ``exp(i w t)`` is
     ``exp(i w t_c) sin(m w h / 2) / (m sin(w h / 2))`` (Dirichlet kernel), so
     a period grid costs O(blocks) per period instead of O(samples).
+
+    Returns
+    -------
+    ndarray, shape (n_blocks, 2 harmonics)
+        Columns in the order of :func:`gyrocomp.sim.vocabulary.periodic.harmonic_names`.
     """
     m = run.n_per_block
     h = 1.0 / run.fs_hz
     centre = run.time_s[: run.n_blocks * m].reshape(run.n_blocks, m).mean(axis=1)
-    w = 2.0 * np.pi / period_s
-    half = 0.5 * w * h
-    kernel = 1.0 if abs(np.sin(half)) < 1e-15 else np.sin(m * half) / (m * np.sin(half))
-    return np.column_stack([np.sin(w * centre), np.cos(w * centre)]) * kernel
+    cols = []
+    for k in range(1, int(harmonics) + 1):
+        w = 2.0 * np.pi * k / period_s
+        half = 0.5 * w * h
+        kernel = 1.0 if abs(np.sin(half)) < 1e-15 else np.sin(m * half) / (m * np.sin(half))
+        cols += [np.sin(w * centre) * kernel, np.cos(w * centre) * kernel]
+    return np.column_stack(cols)
 
 
 def effect_params(effect: str, spec: dict, beta: np.ndarray, names: list, noise) -> dict:

@@ -60,6 +60,7 @@ from scipy import linalg, optimize
 
 from gyrocomp.diagnose.effects import DETERMINISTIC, KINDS, PER_RUN, STOCHASTIC, Run, TemperatureScale, design, effect_columns, periodic_block_means
 from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+from gyrocomp.sim.vocabulary.periodic import harmonic_names
 
 __all__ = ["Fitted", "Problem", "Search", "fit_baseline", "extend", "holdout_fit", "residual_of", "sample_arw"]
 
@@ -458,19 +459,50 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_probl
         return dict(kind.forms[int(np.argmin(bic))])
 
     grid = KINDS[effect].grid(s, length_s, run.block_s)
+    fixed = {}
     if effect == "periodic":
-        values = _periodic_grid_deviances(parts, grid)
+        values, fixed = _periodic_waveform(parts, grid, s, length_s, run.block_s)
     else:
         values = np.array([deviance({key: float(v)}) for v in grid])
     i = int(np.argmin(values))
     a, b = sorted((np.log(grid[max(i - 1, 0)]), np.log(grid[min(i + 1, grid.size - 1)])))
+    best_value = deviance({key: float(grid[i]), **fixed})
     if b > a:
         best = optimize.minimize_scalar(
-            lambda z: deviance({key: float(np.exp(z))}), bounds=(a, b), method="bounded", options={"xatol": 1e-3}
+            lambda z: deviance({key: float(np.exp(z)), **fixed}), bounds=(a, b), method="bounded", options={"xatol": 1e-3}
         )
-        if best.fun < values[i]:
-            return {key: float(np.exp(best.x))}
-    return {key: float(grid[i])}
+        if best.fun < best_value:
+            return {key: float(np.exp(best.x)), **fixed}
+    return {key: float(grid[i]), **fixed}
+
+
+def _periodic_waveform(parts, periods, settings, length_s, block_s):
+    """The multiharmonic periodogram: at every period the deviance of a Fourier series of ``H`` harmonics, ``H`` chosen by the BIC.
+
+    Every ``H`` from 1 to ``periodic_harmonics`` that the period may carry
+    (:meth:`gyrocomp.sim.vocabulary.periodic._Periodic.max_harmonics`) is
+    scored ``deviance + 2 H R ln n`` (``2 H`` per-run coefficients on each of
+    the ``R`` runs, ``n`` their blocks: the selection's parameter count); the
+    harmonics summed, a pulse train's fundamental scores its whole power,
+    not the fundamental's share (Schwarzenberg-Czerny 1996).
+
+    Returns
+    -------
+    values : ndarray
+        Per period, the deviance at the best ``H`` plus that penalty (the grid's argmin is the best waveform).
+    fixed : dict
+        ``{"harmonics": H}`` of the best period, held while its period is refined.
+    """
+    effect = KINDS["periodic"]
+    h_max = np.array([effect.max_harmonics(settings, p, length_s, block_s) for p in periods])
+    log_n = np.log(sum(part.y_w.size for part in parts))
+    scores = np.full((int(h_max.max()), len(periods)), np.inf)
+    for h in range(1, scores.shape[0] + 1):
+        ok = h_max >= h
+        scores[h - 1, ok] = _periodic_grid_deviances(parts, periods[ok], h) + 2 * h * len(parts) * log_n
+    best_h = np.argmin(scores, axis=0)
+    values = scores[best_h, np.arange(len(periods))]
+    return values, {"harmonics": int(best_h[int(np.argmin(values))]) + 1}
 
 
 class _JointPart:
@@ -496,13 +528,14 @@ class _JointPart:
         if effect is None:
             return np.empty((self.y_w.size, 0)), []
         if effect == "periodic":
-            return self.whitener.whiten(periodic_block_means(run, params["period_s"])), ["periodic_sin", "periodic_cos"]
+            harmonics = int(params.get("harmonics", 1))
+            return self.whitener.whiten(periodic_block_means(run, params["period_s"], harmonics)), harmonic_names(harmonics)
         full, names = effect_columns(run, effect, params, p.poly_degree, p.scale)
         return self.whitener.whiten(block_means(full, run.n_per_block)), names
 
 
-def _periodic_grid_deviances(parts, periods):
-    """:func:`_joint_deviance` of ``periodic`` at every period of a grid, in a few matrix products.
+def _periodic_grid_deviances(parts, periods, harmonics=1):
+    """:func:`_joint_deviance` of ``periodic`` of `harmonics` harmonics at every period of a grid, in a few matrix products.
 
     The base columns do not change along the grid: with ``U`` an orthonormal
     basis of the (stacked, whitened) base design, ``y_perp = y - U U' y``
@@ -510,6 +543,7 @@ def _periodic_grid_deviances(parts, periods):
     ``constant + |y_perp|^2 - b' A^+ b`` with ``b = C' y_perp`` and
     ``A = C'C - (U'C)'(U'C)``; all periods' ``C`` are whitened at once.
     """
+    c = 2 * int(harmonics)
     free = [np.array([n in PER_RUN for n in part.base_names]) for part in parts]
     shared = np.vstack([part.base_w[:, ~f] for part, f in zip(parts, free)])
     per_run = linalg.block_diag(*[part.base_w[:, f] for part, f in zip(parts, free)])
@@ -518,17 +552,17 @@ def _periodic_grid_deviances(parts, periods):
     y = np.concatenate([part.y_w for part in parts])
     y_perp = y - u @ (u.T @ y)
     n_g = len(periods)
-    gram = np.zeros((n_g, 2 * len(parts), 2 * len(parts)))
-    b = np.zeros((n_g, 2 * len(parts)))
-    ucs = np.zeros((n_g, u.shape[1], 2 * len(parts)))
+    gram = np.zeros((n_g, c * len(parts), c * len(parts)))
+    b = np.zeros((n_g, c * len(parts)))
+    ucs = np.zeros((n_g, u.shape[1], c * len(parts)))
     row = 0
     for j, part in enumerate(parts):
         k = part.y_w.size
-        cols = np.hstack([periodic_block_means(part.problem.run, p) for p in periods])  # (k, 2 G)
-        cw = part.whitener.whiten(cols).reshape(k, n_g, 2).transpose(1, 0, 2)  # (G, k, 2)
-        gram[:, 2 * j : 2 * j + 2, 2 * j : 2 * j + 2] = np.einsum("gki,gkj->gij", cw, cw)
-        b[:, 2 * j : 2 * j + 2] = np.einsum("gki,k->gi", cw, y_perp[row : row + k])
-        ucs[:, :, 2 * j : 2 * j + 2] = np.einsum("kp,gki->gpi", u[row : row + k], cw)
+        cols = np.hstack([periodic_block_means(part.problem.run, p, harmonics) for p in periods])  # (k, c G)
+        cw = part.whitener.whiten(cols).reshape(k, n_g, c).transpose(1, 0, 2)  # (G, k, c)
+        gram[:, c * j : c * j + c, c * j : c * j + c] = np.einsum("gki,gkj->gij", cw, cw)
+        b[:, c * j : c * j + c] = np.einsum("gki,k->gi", cw, y_perp[row : row + k])
+        ucs[:, :, c * j : c * j + c] = np.einsum("kp,gki->gpi", u[row : row + k], cw)
         row += k
     a = gram - np.einsum("gpi,gpj->gij", ucs, ucs)
     explained = np.einsum("gi,gij,gj->g", b, np.linalg.pinv(a, rcond=1e-12, hermitian=True), b)

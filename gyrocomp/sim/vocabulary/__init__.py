@@ -29,7 +29,7 @@ temp_rate           (form: symmetric    --                         yes
 hysteresis          ``deadband_c``      ``hysteresis_deadband_c``  yes
 warmup              ``tau_s``           ``warmup_tau_s``           no
 rate_ramp           --                  --                         no
-periodic            ``period_s``        ``periodic_*`` (Fourier)   no
+periodic            ``period_s``, H     ``periodic_*`` (Fourier)   no
 bias_instability    (noise term)        --                         no
 rate_random_walk    (noise term)        --                         no
 ==================  ==================  =========================  ============
@@ -47,7 +47,7 @@ from gyrocomp.sim.vocabulary import (
     thermal_lag,
     warmup,
 )
-from gyrocomp.sim.vocabulary._base import Effect
+from gyrocomp.sim.vocabulary._base import Columns, Effect
 
 __all__ = ["Effect", "KINDS", "EFFECTS", "DETERMINISTIC", "STOCHASTIC", "NEEDS_TEMPERATURE", "PER_RUN"]
 
@@ -65,5 +65,5 @@ DETERMINISTIC = tuple(name for name, e in KINDS.items() if not e.stochastic)
 """Effects that enter as regressors on the rate."""
 NEEDS_TEMPERATURE = tuple(name for name, e in KINDS.items() if e.needs_temperature)
 """Effects that cannot be simulated or diagnosed without a temperature."""
-PER_RUN = ("offset",) + tuple(c for e in KINDS.values() for c in e.per_run)
-"""Design columns re-estimated on every run (a power-on constant, an interference phase)."""
+PER_RUN = Columns(("offset",) + tuple(c for e in KINDS.values() for c in e.per_run))
+"""Design columns re-estimated on every run (a power-on constant, an interference phase and its harmonics)."""

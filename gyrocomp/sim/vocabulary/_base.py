@@ -6,9 +6,27 @@ import abc
 
 import numpy as np
 
-__all__ = ["Effect", "HOUR_S"]
+__all__ = ["Effect", "Columns", "HOUR_S"]
 
 HOUR_S = 3600.0
+
+
+class Columns(tuple):
+    """Design-column names that also hold their numbered repeats: ``"periodic_sin_3"`` is in ``Columns(("periodic_sin",))``.
+
+    A periodic waveform's ``k``-th harmonic repeats its fundamental's
+    columns with the suffix ``_k``; they are per-run columns like the
+    fundamental's.
+
+    >>> "periodic_cos_2" in Columns(("periodic_sin", "periodic_cos")), "periodic_cos_x" in Columns(("periodic_cos",))
+    (True, False)
+    """
+
+    def __contains__(self, name):
+        if tuple.__contains__(self, name):
+            return True
+        base, _, k = str(name).rpartition("_")
+        return k.isdigit() and tuple.__contains__(self, base)
 
 
 class Effect(abc.ABC):
@@ -32,8 +50,9 @@ class Effect(abc.ABC):
         holding that grid.
     n_params : int
         Free parameters on one run (a grid-searched one counts as one); of
-        the plainest form when the effect has :attr:`forms`.
-    per_run : tuple of str
+        the plainest form when the effect has :attr:`forms` (a sinusoid for
+        ``periodic``; :meth:`n_params_of` for a fitted one).
+    per_run : Columns
         Design columns re-estimated on every run (an interference phase).
     unit_columns : int or None
         How many leading columns make the unit shape of the reported
@@ -54,21 +73,25 @@ class Effect(abc.ABC):
     nonlinear: str | None = None
     grid_setting: str | None = None
     n_params: int = 1
-    per_run: tuple = ()
+    per_run: Columns = Columns()
     unit_columns: int | None = None
     forms: tuple = ()
 
     def __repr__(self):
         return f"<effect {self.name}>"
 
-    def n_params_runs(self, n_runs: int) -> int:
+    def n_per_run(self, params=None) -> int:
+        """Design columns re-estimated on every run at `params`."""
+        return len(self.per_run)
+
+    def n_params_runs(self, n_runs: int, params=None) -> int:
         """Free parameters when fitted on `n_runs` runs together: the per-run columns count once per run.
 
         >>> from gyrocomp.sim.vocabulary import KINDS
-        >>> KINDS["periodic"].n_params_runs(2), KINDS["warmup"].n_params_runs(2)
-        (5, 2)
+        >>> KINDS["periodic"].n_params_runs(2), KINDS["warmup"].n_params_runs(2), KINDS["periodic"].n_params_runs(2, {"harmonics": 3})
+        (5, 2, 13)
         """
-        return self.n_params + len(self.per_run) * (n_runs - 1)
+        return self.n_params_of(params or {}) + self.n_per_run(params) * (n_runs - 1)
 
     def n_params_of(self, params: dict) -> int:
         """Free parameters on one run of the form `params` (:attr:`forms`); :attr:`n_params` without forms."""
