@@ -30,6 +30,7 @@ from gyrocomp.models._base import (
     check_X_y,
     finite_array,
     rmse,
+    scaled_columns,
 )
 
 __all__ = ["ANFIS"]
@@ -260,7 +261,7 @@ class ANFIS(Learner):
 
     def _forward(self, X: np.ndarray) -> np.ndarray:
         """Model output for each row of `X`, in the unit of y."""
-        Z = (X - self.input_offset_) / self.input_scale_
+        Z = scaled_columns(X, self.input_offset_, self.input_scale_)
         return _predict(Z, self.premises_, self.consequents_, self.mf)
 
     def _check_params(self, n_features: int) -> tuple[int, ...]:
@@ -391,9 +392,9 @@ def _predict(Z: np.ndarray, premises: list[np.ndarray], consequents: np.ndarray,
     slope = stacked[:, 1] if gbell else np.zeros(len(stacked))
     n_mfs = np.array([len(p) for p in premises], dtype=np.int64)
     first = np.concatenate([[0], np.cumsum(n_mfs)[:-1]]).astype(np.int64)
-    Z = np.ascontiguousarray(Z, dtype=float)
+    Zt = np.ascontiguousarray(np.asarray(Z, dtype=float).T)  # no copy for Fortran-ordered Z (scaled_columns)
     return forward(
-        Z, np.ascontiguousarray(centre), np.ascontiguousarray(width), np.ascontiguousarray(slope), first, n_mfs,
+        Zt, np.ascontiguousarray(centre), np.ascontiguousarray(width), np.ascontiguousarray(slope), first, n_mfs,
         np.ascontiguousarray(consequents, dtype=float), gbell, np.empty(len(Z)),
     )
 

@@ -40,7 +40,7 @@ import pandas as pd
 from gyrocomp import recordings
 from gyrocomp.config import bind, check_seed
 from gyrocomp.errors import InputError
-from gyrocomp.models._base import check_choice, check_float, finite_array
+from gyrocomp.models._base import check_choice, check_float, finite_array, scaled_columns
 from gyrocomp.pipeline.rate import CausalRate, check_described
 from gyrocomp.pipeline.settings import PIPELINE_KINDS, RateSettings
 from gyrocomp.streaming import CHUNK_ROWS
@@ -117,7 +117,7 @@ class DriftModel:
             X = clamp_inputs(X, self)
         out = {}
         for segment, (learner, x_offset, x_scale, y_offset, y_scale, y_range) in self.learners.items():
-            y = learner.predict((X - x_offset) / x_scale) * y_scale + y_offset
+            y = learner.predict(scaled_columns(X, x_offset, x_scale)) * y_scale + y_offset
             out[segment] = np.clip(y, *y_range) if self.clip_output else y
         return out
 
@@ -155,7 +155,7 @@ class CausalCompensation:
         """``drift_model`` and ``compensated`` [deg/s] of the chunk."""
         temperature = np.asarray(temperature, dtype=float)
         rate = np.asarray(rate, dtype=float)
-        X = np.column_stack([temperature, self._rate(temperature)])
+        X = np.array([temperature, self._rate(temperature)]).T  # Fortran order: each column contiguous
         self._seen.add(X)
         drift = np.sum(list(self.model.predict(X, clamp=self.clamp).values()), axis=0)
         return drift, rate - drift
@@ -256,8 +256,10 @@ def clamp_inputs(X: np.ndarray, model: DriftModel) -> np.ndarray:
     -------
     ndarray, shape (n_samples, 2)
     """
-    (t_lo, t_hi), (r_lo, r_hi) = model.temperature_range_c, model.rate_range_c_per_s
-    return np.clip(X, [t_lo, r_lo], [t_hi, r_hi])
+    out = np.empty(X.shape, order="F")  # each column contiguous (:func:`~gyrocomp.models._base.scaled_columns`)
+    for column, (low, high) in enumerate((model.temperature_range_c, model.rate_range_c_per_s)):
+        np.clip(X[:, column], low, high, out=out[:, column])
+    return out
 
 
 def _finite_range(where: str, what: str, low, high) -> tuple[float, float]:

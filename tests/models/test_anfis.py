@@ -138,6 +138,57 @@ def test_compiled_forward_is_the_rule_grid_of_the_paper(mf):
     assert_allclose(got, numpy_path, rtol=1e-12, atol=1e-12 * np.max(np.abs(numpy_path)))
 
 
+@pytest.mark.parametrize("mf", ["gbell", "gauss"])
+def test_compiled_forward_equals_numpy_path_on_random_inputs(mf):
+    """_predict (numba, its own exp and log) against the log-domain NumPy path of training, 4 x 4 and 2 x 3 x 2 MFs.
+
+    Random premises around the initial grid, random consequents, inputs
+    over [-1, 2] (inside and well outside the unit box): equal to 1e-12 of
+    the output's scale (the output crosses zero, so not of each value).
+    """
+    rng = np.random.default_rng(19)
+    for n_mfs in ((4, 4), (2, 3, 2)):
+        width = 3 if mf == "gbell" else 2
+        premises = [anfis_module._initial_premises(m, mf) * rng.uniform(0.8, 1.25, (m, width)) for m in n_mfs]
+        consequents = rng.normal(size=(int(np.prod(n_mfs)), len(n_mfs) + 1))
+        Z = rng.uniform(-1.0, 2.0, (5000, len(n_mfs)))
+        wbar = anfis_module._normalised_firing([anfis_module._log_mu(p, Z[:, j], mf) for j, p in enumerate(premises)])
+        numpy_path = np.einsum("nr,nr->n", wbar, Z @ consequents[:, :-1].T + consequents[:, -1])
+        got = anfis_module._predict(Z, premises, consequents, mf)
+        assert_allclose(got, numpy_path, rtol=0, atol=1e-12 * np.max(np.abs(numpy_path)))
+
+
+def test_compiled_forward_gives_each_row_the_same_bits_wherever_it_falls():
+    """A row's output does not depend on the rows around it: vector body, scalar tail and block edges agree bit for bit."""
+    rng = np.random.default_rng(3)
+    premises = [anfis_module._initial_premises(m, "gbell") + rng.normal(0, 0.02, (m, 3)) for m in (4, 2)]
+    consequents = rng.normal(size=(8, 3))
+    Z = rng.uniform(-0.2, 1.2, (1000, 2))
+    whole = anfis_module._predict(Z, premises, consequents, "gbell")
+    for start in (1, 2, 3, 255, 257):
+        part = anfis_module._predict(Z[start:], premises, consequents, "gbell")
+        np.testing.assert_array_equal(part, whole[start:])
+    np.testing.assert_array_equal(anfis_module._predict(Z[::-1], premises, consequents, "gbell"), whole[::-1])
+
+
+def test_compiled_exp_and_log_within_one_ulp_of_libm():
+    """The kernel's vectorisable exp and log against NumPy's (libm) over their whole range, and at the edges."""
+    from gyrocomp.models._anfis_compiled import _exp, _log
+
+    rng = np.random.default_rng(5)
+    x = np.concatenate([rng.uniform(-708.0, 708.0, 3000), rng.uniform(-1.0, 1.0, 3000), [0.0, -708.0, 708.0, 1e-300, -1e-300]])
+    got = np.array([_exp(v) for v in x])
+    assert_allclose(got, np.exp(x), rtol=2.3e-16, atol=0)
+    assert _exp(1000.0) == _exp(708.0) and _exp(-1000.0) == _exp(-708.0) > 0
+    y = np.concatenate([
+        np.exp(rng.uniform(-690.0, 690.0, 3000)), rng.uniform(0.5, 2.0, 3000),
+        [1e-300, 1e300, 1.0, 2.0, 0.5, np.sqrt(2.0), np.nextafter(np.sqrt(2.0), 0), np.nextafter(1.0, 2), np.nextafter(1.0, 0)],
+    ])
+    got = np.array([_log(v) for v in y])
+    assert_allclose(got, np.log(y), rtol=2.3e-16, atol=1e-300)
+    assert _log(1.0) == 0.0
+
+
 def test_jang_step_size_rules():
     """+10 % after four reductions in a row, -10 % after up-down-up-down, else unchanged."""
     update = anfis_module._update_step
