@@ -323,7 +323,7 @@ class TableWriter:
             import pyarrow as pa
             import pyarrow.parquet as pq
 
-            table = pa.table(columns)
+            table = pa.Table.from_arrays([_arrow(v) for v in columns.values()], names=list(columns))
             if self._parquet is None:
                 schema = table.schema
                 if self._first:
@@ -383,6 +383,21 @@ def _numpy(column) -> np.ndarray:
     dtype = np.dtype(column.type.to_pandas_dtype())
     parts = [np.frombuffer(c.buffers()[1], dtype=dtype, count=len(c), offset=c.offset * dtype.itemsize) for c in column.chunks]
     return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+def _arrow(values) -> "pyarrow.Array":
+    """A NumPy column as Arrow: a contiguous float64 one over its own buffer (no pandas, no copy), else ``pa.array``.
+
+    ``pa.array`` imports pandas to ask whether it was given a Series (half a
+    second of a ``compensate`` that needs nothing else from it). NaN stays
+    a NaN value, not a null, either way.
+    """
+    import pyarrow as pa
+
+    values = np.asarray(values)
+    if values.dtype != np.float64 or values.ndim != 1 or not values.flags.c_contiguous:
+        return pa.array(values)
+    return pa.Array.from_buffers(pa.float64(), len(values), [None, pa.py_buffer(values)])
 
 
 def _exact_rows(frames, rows: int):

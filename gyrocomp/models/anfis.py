@@ -15,8 +15,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import scipy.linalg
-from scipy.special import expit
 
 from gyrocomp.errors import InputError
 from gyrocomp.models._base import (
@@ -334,6 +332,8 @@ def _consequents(design: np.ndarray, y: np.ndarray, n_rules: int, ridge: float) 
     level = float(np.mean(y))
     gram = design.T @ design
     gram[np.diag_indices_from(gram)] += len(y) * ridge
+    import scipy.linalg  # training only: evaluating a model does without SciPy's import
+
     theta = scipy.linalg.solve(gram, design.T @ (y - level), assume_a="pos").reshape(n_rules, -1)
     theta[:, -1] += level
     return theta
@@ -355,6 +355,8 @@ def _dlog_mu(p: np.ndarray, x: np.ndarray, mf: str) -> np.ndarray:
         a, b, c = p[:, 0], p[:, 1], p[:, 2]
         u = (x[:, None] - c) / a
         log_abs = np.log(np.maximum(np.abs(u), _TINY))
+        from scipy.special import expit  # training only, as scipy.linalg above
+
         one_minus_mu = expit(2.0 * b * log_abs)  # |u|^2b / (1 + |u|^2b)
         safe_u = np.where(u == 0, 1.0, u)
         d_a = 2.0 * b * one_minus_mu / a

@@ -12,7 +12,6 @@ from __future__ import annotations
 from typing import Any, Callable
 
 import numpy as np
-from scipy.special import expit
 
 from gyrocomp.models._base import (
     Learner,
@@ -25,6 +24,12 @@ from gyrocomp.models._base import (
 )
 
 __all__ = ["ELM", "ACTIVATIONS", "activation"]
+
+
+def _sigmoid(z: np.ndarray) -> np.ndarray:
+    from scipy.special import expit  # on first use: importing scipy.special costs every command a third of a second
+
+    return expit(z)
 
 
 def _hardlim(z: np.ndarray) -> np.ndarray:
@@ -40,7 +45,7 @@ def _radbas(z: np.ndarray) -> np.ndarray:
 
 
 ACTIVATIONS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
-    "sigmoid": expit,
+    "sigmoid": _sigmoid,
     "sin": np.sin,
     "hardlim": _hardlim,
     "tribas": _tribas,

@@ -33,9 +33,9 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from gyrocomp import recordings
 from gyrocomp.config import bind, check_seed
@@ -45,6 +45,9 @@ from gyrocomp.pipeline.rate import CausalRate, check_described
 from gyrocomp.pipeline.settings import PIPELINE_KINDS, RateSettings
 from gyrocomp.streaming import CHUNK_ROWS
 from gyrocomp.pipeline.train import INPUTS, axis_models, class_sums, segment_inputs
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "COMPENSATION_SCHEMA",
@@ -348,6 +351,8 @@ def compensate(
             summary["segment_classes"] = classes
     else:
         compensated = rate - drift_model
+    import pandas as pd  # here: the causal stream does without it (half a second of import)
+
     frame = pd.DataFrame(
         {
             "time": data["time"].to_numpy(dtype=float),
