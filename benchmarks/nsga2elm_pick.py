@@ -2,7 +2,8 @@
 
 Each seed fits ``NSGA2ELM`` with the settings of ``configs/models.toml``
 ``[nsga2elm]`` (pop 40, 15 generations, crossover 0.8, mutation 0.15, the
-knee candidate and its blocked cross-validation test) and scores it on a
+knee candidate, its blocked cross-validation sign test and its
+leave-one-regime-out check) and scores it on a
 held-out run against **the default ELM**: ``ELM()`` with the configured
 defaults and the same random hidden weights (``ELM(seed=elm_seed_)``),
 fitted on the same training data. That is the plain ELM in the search's
@@ -18,7 +19,12 @@ divides by the mean of ten default ELMs (seeds 0-9) on the same data, and
 spread of the default ELM itself, which a pick that keeps it inherits.
 
 Seeds: ``tuning`` (0-49) were looked at while the rule was developed;
-``check`` (1000-1049) were run once, after, and give the done-when.
+``check`` (1000-1049) were run once after the sign test was fixed, and
+looked at while the regime check was added (so now tuning seeds too);
+``fresh`` (2000-2049) were run once, after the regime check was fixed.
+Each run of the script replaces the sets it runs in the output file when
+the settings are the same and keeps the others; the records of earlier
+rules stay under ``earlier``.
 
 Problems (inputs normalised to about [-1, 1]; held-out inputs held inside
 the training range as the pipeline's ``clip_inputs`` does; errors in
@@ -109,7 +115,6 @@ def sample_problem():
     """(X, y, X_test, target_test) from sample_data/: rate against (T, dT/dt), 2000 block means."""
     from gyrocomp import recordings
     from gyrocomp.pipeline.rate import model_inputs
-    from gyrocomp.pipeline.train import _block_means
 
     out = []
     for name in ("oven_train", "oven_test"):
@@ -117,9 +122,14 @@ def sample_problem():
         out.append((model_inputs(rec.column("temperature"), rec.fs_hz), rec.column("rate")))
     (X, y), (X_test, y_test) = out
     X, X_test = _normalise(X, X), _normalise(X_test, X)
-    Xb, yb = _block_means(X, y, 2000)
-    Xtb, ytb = _block_means(X_test, y_test, 2000)
-    return Xb, yb, Xtb, ytb
+    return (*_block_means(X, y, 2000), *_block_means(X_test, y_test, 2000))
+
+
+def _block_means(X: np.ndarray, y: np.ndarray, max_samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """Means of consecutive blocks of ``ceil(n / max_samples)`` samples, the last one partial (train's ``max_samples``)."""
+    starts = np.arange(0, len(y), -(-len(y) // max_samples))
+    counts = np.diff(np.append(starts, len(y)))
+    return np.add.reduceat(X, starts, axis=0) / counts[:, None], np.add.reduceat(y, starts) / counts
 
 
 def one(problem: str, seed: int, overrides: tuple = (), perturb: float = 0.0) -> dict:
@@ -156,17 +166,22 @@ def one(problem: str, seed: int, overrides: tuple = (), perturb: float = 0.0) ->
         "kept_plain_elm": model.best_index_ is None,
         "candidate": {k: model.front_[model.candidate_index_][k] for k in ("n_hidden", "activation", "weight_scale")},
         "cv_blocks_won": int(np.sum(model.cv_rmse_[1] < model.cv_rmse_[0])), "p_value": model.p_value_,
+        "refused_by_regime_check": bool(model.best_index_ is None and model.p_value_ < float(model.alpha)),
+        "regimes": model.regimes_, "regime_rmse_candidate_over_plain": (model.regime_rmse_[1] / model.regime_rmse_[0]).tolist(),
         "front": [(m["n_hidden"], m["activation"], m["weight_scale"]) for m in model.front_],
         "fit_s": round(fit_s, 3),
     }
 
 
 def summarise(rows: list[dict]) -> dict:
-    """Per problem: how often the plain ELM was kept, and the quantiles of the ratios."""
+    """Per problem: how often the plain ELM was kept, the quantiles of the ratios, the median ratio when the candidate was taken."""
     summary = {}
     for p in PROBLEMS:
         mine = [row for row in rows if row["problem"] == p]
-        entry = {"n": len(mine), "kept_plain_elm": int(sum(row["kept_plain_elm"] for row in mine))}
+        taken = [row["ratio"] for row in mine if not row["kept_plain_elm"]]
+        entry = {"n": len(mine), "kept_plain_elm": int(sum(row["kept_plain_elm"] for row in mine)),
+                 "candidate_taken": len(taken), "ratio_when_taken_median": round(float(np.median(taken)), 4) if taken else None,
+                 "refused_by_regime_check": int(sum(row["refused_by_regime_check"] for row in mine))}
         for key in ("ratio", "ratio_to_mean_of_10", "plain_max_over_mean"):
             r = np.array([row[key] for row in mine])
             entry[key] = {
@@ -175,7 +190,8 @@ def summarise(rows: list[dict]) -> dict:
                 "above_goal": int((r > GOAL).sum()),
             }
         summary[p] = entry
-        print(f"{p:7s} kept the plain ELM on {entry['kept_plain_elm']}/{entry['n']}")
+        print(f"{p:7s} kept the plain ELM on {entry['kept_plain_elm']}/{entry['n']} (regime check refused "
+              f"{entry['refused_by_regime_check']}); median ratio when taken {entry['ratio_when_taken_median']}")
         for key in ("ratio", "ratio_to_mean_of_10", "plain_max_over_mean"):
             print(f"  {key:20s} quantiles 0/5/25/50/75/95/100 %: {entry[key]['quantiles_0_5_25_50_75_95_100']}; "
                   f"> {GOAL}: {entry[key]['above_goal']}")
@@ -217,14 +233,15 @@ def _value(text: str):
         return text
 
 
-SEED_SETS = {"tuning": 0, "check": 1000}
-"""First seed of each set: tuning seeds were looked at while developing the pick; check seeds only once."""
+SEED_SETS = {"tuning": 0, "check": 1000, "fresh": 2000}
+"""First seed of each set (module docstring: which were looked at while the rule was developed)."""
 
 
 def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=50, help="seeds per problem in each set")
-    parser.add_argument("--sets", default="tuning,check", help="comma-separated: tuning (seeds 0-), check (seeds 1000-)")
+    parser.add_argument("--sets", default="tuning,check,fresh",
+                        help="comma-separated: tuning (seeds 0-), check (seeds 1000-), fresh (seeds 2000-)")
     parser.add_argument("--stability", type=int, default=5, metavar="N",
                         help="refit the first N tuning seeds per problem on inputs changed by 1e-12 relative (0: skip)")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "nsga2elm_pick.json")
@@ -232,33 +249,56 @@ def main(argv: list[str]) -> int:
                         help="override a [nsga2elm] setting, e.g. rmse_tolerance=1e9 accept=always (the whole-front knee)")
     args = parser.parse_args(argv)
     overrides = tuple((k, _value(v)) for k, v in (item.split("=", 1) for item in args.set))
+    from gyrocomp.config import load_config
+
+    settings = {**load_config(ROOT / "configs" / "models.toml")["nsga2elm"], **dict(overrides)}
+    result = _previous(args.out, settings)
+    result["goal"] = f"pick / default ELM (same random weights) held-out RMSE <= {GOAL} on every seed"
+    result["settings"] = settings
+    sets = result.setdefault("sets", {})
     start = time.perf_counter()
-    sets = {}
+    ran = {}
     for name in args.sets.split(","):
         first = SEED_SETS[name]
         print(f"{name} seeds {first}-{first + args.seeds - 1}")
         rows = [one(p, s, overrides) for p in PROBLEMS for s in range(first, first + args.seeds)]
         worst = round(max(row["ratio"] for row in rows), 4)
-        sets[name] = {"seeds": [first, first + args.seeds - 1], "worst_ratio": worst, "met": bool(worst <= GOAL),
-                      "summary": summarise(rows), "runs": rows}
+        ran[name] = {"seeds": [first, first + args.seeds - 1], "worst_ratio": worst, "met": bool(worst <= GOAL),
+                     "summary": summarise(rows), "runs": rows}
         print(f"{name}: worst ratio {worst} (goal <= {GOAL})")
-    result = {
-        "goal": f"pick / default ELM (same random weights) held-out RMSE <= {GOAL} on every seed",
-        "settings": "configs/models.toml [nsga2elm]" + (f" with {dict(overrides)}" if overrides else ""),
-        "sets": sets,
-    }
-    if args.stability and "tuning" in sets:
-        result["stability"] = stability(sets["tuning"]["runs"], overrides, args.stability, 1e-12)
+        sets[name] = _without_fronts(ran[name])
+        _write(args.out, result)  # each set as soon as it is done: a long run keeps what it measured
+    if args.stability and "tuning" in ran:
+        result["stability"] = stability(ran["tuning"]["runs"], overrides, args.stability, 1e-12)
     result["wall_s"] = round(time.perf_counter() - start, 1)
-    for entry in sets.values():  # the fronts served the stability comparison; the file keeps their sizes
-        for row in entry["runs"]:
-            row["front_size"] = len(row.pop("front"))
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_suffix(".tmp")
-    tmp.write_text(json.dumps(result, indent=1) + "\n")
-    tmp.replace(args.out)
+    _write(args.out, result)
     print(f"{result['wall_s']} s")
-    return 0 if all(entry["met"] for entry in sets.values()) else 1
+    return 0 if all(entry["met"] for entry in ran.values()) else 1
+
+
+def _previous(path: Path, settings: str) -> dict:
+    """What `path` holds: with the same `settings`, all of it; otherwise its record moves to the end of ``earlier``."""
+    if not path.exists():
+        return {}
+    old = json.loads(path.read_text())
+    if old.get("settings") == json.loads(json.dumps(settings)):
+        return old
+    earlier = old.pop("earlier", [])
+    return {"earlier": earlier + ([old] if old.get("sets") else [])}
+
+
+def _without_fronts(entry: dict) -> dict:
+    """`entry` with each run's front replaced by its size (the fronts serve the stability comparison only)."""
+    runs = [{**{k: v for k, v in row.items() if k != "front"}, "front_size": len(row["front"])} for row in entry["runs"]]
+    return {**entry, "runs": runs}
+
+
+def _write(path: Path, result: dict) -> None:
+    """`result` as JSON at `path`, through a temporary file and a rename."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(result, indent=1) + "\n")
+    tmp.replace(path)
 
 
 if __name__ == "__main__":

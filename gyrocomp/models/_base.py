@@ -27,12 +27,15 @@ from gyrocomp.errors import GyrocompError, InputError
 PREDICT_ROWS = 1 << 16
 """Rows evaluated at once by :meth:`Learner.predict` (ANFIS with 25 rules: 13 MB of firing strengths)."""
 
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 """Version of the ``to_dict`` layout; :meth:`Learner.from_dict` refuses newer ones.
 
 2: NSGA-II-ELM's pick became a cross-validated sign test (``accept``, ``cv_folds``,
 ``alpha``, fitted ``cv_rmse_``), replacing the validation margin ``min_gain`` of 1.
-Every other kind reads the same in 1 and 2.
+3: NSGA-II-ELM's pick also holds each thermal regime out (``regime_holdout``,
+``temperature_column``, ``regime_window``, ``soak_fraction``, fitted ``regimes_``,
+``regime_rmse_``).
+Every other kind reads the same in 1, 2 and 3.
 """
 
 

@@ -126,11 +126,13 @@ def test_sklearn_clone_works():
 
 
 def test_from_dict_reads_older_layouts_only_where_they_did_not_change():
-    """Layout 1 of an ELM still loads; layout 1 of NSGA-II-ELM (``min_gain``) asks for retraining."""
+    """Layouts 1 and 2 of an ELM still load; NSGA-II-ELM's 1 (``min_gain``) and 2 (no regime check) ask for retraining."""
     elm = ELM(n_hidden=5, seed=0).fit(X_NORM, Y)
     d = json.loads(json.dumps(elm.to_dict()))
-    d["version"] = 1
-    np.testing.assert_array_equal(ELM.from_dict(d).predict(X_NORM), elm.predict(X_NORM))
-    old = {"kind": "nsga2elm", "version": 1, "params": {"min_gain": 0.1}, "fitted": None}
-    with pytest.raises(InputError, match=r"older gyrocomp.*train the model again"):
-        NSGA2ELM.from_dict(old)
+    for version in (1, 2):
+        d["version"] = version
+        np.testing.assert_array_equal(ELM.from_dict(d).predict(X_NORM), elm.predict(X_NORM))
+    for version, params in ((1, {"min_gain": 0.1}), (2, {"accept": "sign_test"})):
+        old = {"kind": "nsga2elm", "version": version, "params": params, "fitted": None}
+        with pytest.raises(InputError, match=r"older gyrocomp.*train the model again"):
+            NSGA2ELM.from_dict(old)
