@@ -25,9 +25,8 @@ Every loop runs over the rows of a block with the same arithmetic for
 each row, so LLVM compiles it to AVX2 instructions, four rows at a time.
 libm's ``log`` and ``exp`` are function calls that stop that; :func:`_log`
 and :func:`_exp` are the same functions in plain arithmetic (fdlibm's
-``__ieee754_log`` [3]; Cody-Waite reduction and the Taylor polynomial of
-degree 13 for ``exp``), within one unit in the last place of libm's
-(tests/models/test_anfis.py). On the two models of PE-LCD-ANFIS this is
+``__ieee754_log`` and ``__ieee754_exp`` [3]), within one unit in the last
+place of libm's (tests/models/test_anfis.py). On the two models of PE-LCD-ANFIS this is
 about six times faster than the row-by-row kernel with libm calls
 (``benchmarks/bench_long.py``). Without ``fastmath`` LLVM neither
 reorders nor fuses the arithmetic, so each row gets the same bytes
@@ -43,7 +42,7 @@ References
 ----------
 .. [1] J.-S. R. Jang, IEEE Trans. Syst., Man, Cybern. 23(3), 665-685 (1993).
 .. [2] H. Cao et al., IEEE Access 9, 95180 (2021).
-.. [3] Sun Microsystems, fdlibm 5.3, ``e_log.c`` (1993).
+.. [3] Sun Microsystems, fdlibm 5.3, ``e_log.c`` and ``e_exp.c`` (1993).
 """
 
 from __future__ import annotations
@@ -53,6 +52,8 @@ import numpy as np
 
 SHIFT_ABOVE = 600.0
 """Smallest exponent s (or q) of an input's largest membership from which nu comes from shifted logarithms."""
+FAR_TOTAL = 1e-200
+"""A row whose memberships of an input sum below this is checked for the shifted path (> n_mfs exp(-SHIFT_ABOVE))."""
 BLOCK = 256
 """Rows per block: the scratch arrays (memberships, rule outputs) then fit in 32 KB of L1 cache."""
 
@@ -69,6 +70,9 @@ _LOG2E = 1.4426950408889634
 _SHIFTER = 6755399441055744.0
 """1.5 * 2^52: x + _SHIFTER rounds x to an integer held in the low bits of the mantissa."""
 _SQRT2 = 1.4142135623730951
+_P1, _P2, _P3 = 1.66666666666666019037e-01, -2.77777777770155933842e-03, 6.61375632143793436117e-05
+_P4, _P5 = -1.65339022054652515390e-06, 4.13813679705723846039e-08
+"""fdlibm's minimax coefficients of R(r^2) = r (e^r + 1) / (e^r - 1) (error < 2^-59)."""
 _LG1, _LG2, _LG3, _LG4 = 6.666666666666735130e-01, 3.999999999940941908e-01, 2.857142874366239149e-01, 2.222219843214978396e-01
 _LG5, _LG6, _LG7 = 1.818357216161805012e-01, 1.531383769920937332e-01, 1.479819860511658591e-01
 """fdlibm's minimax coefficients of (log(1 + f) - 2 s) / s, s = f / (2 + f), in s^2 (error < 2^-58.45)."""
@@ -76,15 +80,20 @@ _LG5, _LG6, _LG7 = 1.818357216161805012e-01, 1.531383769920937332e-01, 1.4798198
 
 @numba.njit(inline="always", error_model="numpy")
 def _exp(x):
-    """e^x for x in [-708, 708] (clamped there), within 1 ulp of libm: e^x = 2^k e^r, |r| <= ln 2 / 2."""
+    """e^x for x in [-708, 708] (clamped there), within 1 ulp of libm (fdlibm ``__ieee754_exp``).
+
+    e^x = 2^k e^r with r = x - k ln 2, |r| <= ln 2 / 2, and e^r from
+    fdlibm's rational form 1 + 2r / (R(r^2) - r).
+    """
     x = min(max(x, -_EXP_ARG), _EXP_ARG)
     shifted = x * _LOG2E + _SHIFTER
     k = shifted - _SHIFTER
-    r = (x - k * _LN2_HI) - k * _LN2_LO
-    # Taylor to r^13: remainder |r|^14 / 14! < 5e-18 of e^r
-    p = 1.0 + r * (1.0 + r * (1.0 / 2 + r * (1.0 / 6 + r * (1.0 / 24 + r * (1.0 / 120 + r * (
-        1.0 / 720 + r * (1.0 / 5040 + r * (1.0 / 40320 + r * (1.0 / 362880 + r * (1.0 / 3628800 + r * (
-            1.0 / 39916800 + r * (1.0 / 479001600 + r * (1.0 / 6227020800)))))))))))))
+    hi = x - k * _LN2_HI
+    lo = k * _LN2_LO
+    r = hi - lo
+    t = r * r
+    c = r - t * (_P1 + t * (_P2 + t * (_P3 + t * (_P4 + t * _P5))))
+    p = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
     # the low bits of `shifted` hold k: 2^k is k + 1023 in the exponent field
     k_bits = np.float64(shifted).view(np.int64) - np.float64(_SHIFTER).view(np.int64)
     return p * np.int64((k_bits + 1023) << 52).view(np.float64)
@@ -125,8 +134,8 @@ def forward(Zt, centre, width, slope, first, n_mfs, consequents, gbell, out):
     """
     n_in, n_rows = Zt.shape
     n_rules = consequents.shape[0]
+    exponent = np.empty((centre.size, BLOCK))
     nu = np.empty((centre.size, BLOCK))
-    smallest = np.empty(BLOCK)
     total = np.empty(BLOCK)
     wbar = np.empty(BLOCK)
     rule = np.empty(BLOCK)
@@ -136,39 +145,40 @@ def forward(Zt, centre, width, slope, first, n_mfs, consequents, gbell, out):
         for j in range(n_in):
             lo, hi = first[j], first[j] + n_mfs[j]
             for i in range(rows):
-                smallest[i] = np.inf
-            # exponents s (gbell) or q (gauss) first, into nu
+                total[i] = 0.0
+            # the exponent s (gbell) or q (gauss) and mu, one pass per membership function
             for k in range(lo, hi):
                 c, per_a, two_b = centre[k], 1.0 / width[k], 2.0 * slope[k]
                 if gbell:
                     for i in range(rows):
-                        u = abs((Zt[j, start + i] - c) * per_a)
-                        e = two_b * _log(min(max(u, _TINY), 1.0 / _TINY))
-                        nu[k, i] = e
-                        smallest[i] = min(smallest[i], e)
+                        e = two_b * _log(min(max(abs((Zt[j, start + i] - c) * per_a), _TINY), 1.0 / _TINY))
+                        mu = 1.0 / (1.0 + _exp(e))
+                        exponent[k, i] = e
+                        nu[k, i] = mu
+                        total[i] += mu
                 else:
                     for i in range(rows):
                         u = (Zt[j, start + i] - c) * per_a
                         e = 0.5 * u * u
-                        nu[k, i] = e
-                        smallest[i] = min(smallest[i], e)
+                        mu = _exp(-e)
+                        exponent[k, i] = e
+                        nu[k, i] = mu
+                        total[i] += mu
+            # rows whose every membership is below exp(-SHIFT_ABOVE) (then the sum is below
+            # n_mfs exp(-SHIFT_ABOVE) < FAR_TOTAL) take the shifted logarithms instead
+            far = 0
             for i in range(rows):
-                total[i] = 0.0
-            # both branches computed, one kept: a select, which vectorises
-            for k in range(lo, hi):
-                if gbell:
-                    for i in range(rows):
-                        shift = smallest[i] >= SHIFT_ABOVE
-                        power = _exp(smallest[i] - nu[k, i] if shift else nu[k, i])
-                        mu = power if shift else 1.0 / (1.0 + power)
-                        nu[k, i] = mu
-                        total[i] += mu
-                else:
-                    for i in range(rows):
-                        shift = smallest[i] >= SHIFT_ABOVE
-                        mu = _exp(smallest[i] - nu[k, i] if shift else -nu[k, i])
-                        nu[k, i] = mu
-                        total[i] += mu
+                far += total[i] < FAR_TOTAL
+            if far:
+                for i in range(rows):
+                    smallest = np.inf
+                    for k in range(lo, hi):
+                        smallest = min(smallest, exponent[k, i])
+                    if smallest >= SHIFT_ABOVE:
+                        total[i] = 0.0
+                        for k in range(lo, hi):
+                            nu[k, i] = _exp(smallest - exponent[k, i])
+                            total[i] += nu[k, i]
             for i in range(rows):
                 total[i] = 1.0 / total[i]
             for k in range(lo, hi):
@@ -182,6 +192,12 @@ def forward(Zt, centre, width, slope, first, n_mfs, consequents, gbell, out):
             for j in range(n_in - 1, -1, -1):
                 digit[j] = first[j] + rest % n_mfs[j]
                 rest //= n_mfs[j]
+            if n_in == 2:  # T and dT/dt: the same operations in one pass
+                d0, d1 = digit[0], digit[1]
+                c0, c1, c2 = consequents[r, 0], consequents[r, 1], consequents[r, 2]
+                for i in range(rows):
+                    out[start + i] += (nu[d0, i] * nu[d1, i]) * ((c2 + c0 * Zt[0, start + i]) + c1 * Zt[1, start + i])
+                continue
             for i in range(rows):
                 wbar[i] = nu[digit[0], i]
                 rule[i] = consequents[r, n_in]
