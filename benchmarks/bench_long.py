@@ -7,7 +7,8 @@ whole process (``python -m gyrocomp ...``), peak resident memory from
 ``compensate``
     2 h at 1 kHz (7.2e6 samples, Parquet): ``compensate --mode causal`` with
     the polynomial model and with PE-LCD-ANFIS (both trained on
-    ``sample_data``) over ``allan`` on the same file; median of `REPEATS`.
+    ``sample_data``) over ``allan`` on the same file; one uncounted warm-up
+    run of each, then the median of `REPEATS` rounds of the three in turn.
 ``memory``
     Peak memory of causal compensation on 12 min and on 2 h at 1 kHz (1x and
     10x), and the size of the extra input columns.
@@ -109,6 +110,8 @@ def part_compensate() -> dict:
     cmds = {"allan": gyrocomp("allan", source, "--out", DATA / "a.json")}
     for name, model in models().items():
         cmds[name] = gyrocomp("compensate", source, model, "--mode", "causal", "--out", DATA / f"c_{name}.parquet")
+    for cmd in cmds.values():  # warm-up, not counted: numba's cache of the ANFIS kernel, the page cache
+        timed(cmd)
     for _ in range(REPEATS):
         for name, cmd in cmds.items():
             runs[name].append(timed(cmd))
@@ -116,6 +119,9 @@ def part_compensate() -> dict:
     return {
         "n_samples": 7_200_000,
         "repeats": REPEATS,
+        "load_average_1min_at_end": os.getloadavg()[0],
+        "threads": {k: os.environ.get(k) for k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")},
+        "anfis_kernel_threads": 1,  # numba njit without parallel: one thread whatever NUMBA_NUM_THREADS
         "wall_s": {k: v[0] for k, v in med.items()},
         "cpu_s": {k: v[1] for k, v in med.items()},
         "polynomial_over_allan_wall": med["polynomial"][0] / med["allan"][0],

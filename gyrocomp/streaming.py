@@ -38,10 +38,21 @@ from gyrocomp import artefacts, recordings
 from gyrocomp.errors import InputError, RecordingNote
 from gyrocomp.recordings import ColumnSpec
 
-__all__ = ["CHUNK_ROWS", "GapError", "ChunkReader", "supports", "read_chunks", "TableWriter"]
+__all__ = ["CHUNK_ROWS", "FILE_CHUNK_ROWS", "GapError", "ChunkReader", "supports", "read_chunks", "TableWriter"]
 
 CHUNK_ROWS = 1 << 16
 """Samples per chunk (the rows :meth:`gyrocomp.models._base.Learner.predict` evaluates at once)."""
+FILE_CHUNK_ROWS = 1 << 18
+"""Samples per chunk, after a first one of `CHUNK_ROWS`, of causal compensation reading a Parquet file.
+
+The causal dT/dt recomputes the part of its current window row a chunk
+starts in (:class:`gyrocomp.pipeline.rate.CausalRate`): with the 60 s window
+at 1 kHz, 7.2e6 samples took 0.55-0.72 s in chunks of 2^16 and 0.33-0.39 s
+in chunks of 2^18. The sample rate is the first chunk's, so that one keeps
+`CHUNK_ROWS` samples and the output does not depend on this number.
+Standard input keeps `CHUNK_ROWS` throughout (each chunk is written as
+soon as it is compensated).
+"""
 
 
 class GapError(InputError):
@@ -66,10 +77,11 @@ class ChunkReader:
         the first of a segment, found so far in this reading.
     """
 
-    def __init__(self, path, columns: ColumnSpec, *, rows: int, require_temperature: bool, usecols, jitter_tolerance: float, gaps: bool = False):
+    def __init__(self, path, columns: ColumnSpec, *, rows: int, require_temperature: bool, usecols, jitter_tolerance: float, gaps: bool = False, first_rows: int | None = None):
         self.name = "-" if str(path) == "-" else os.fspath(path)
         self.columns = columns
         self.rows = int(rows)
+        self.first_rows = self.rows if first_rows is None else int(first_rows)
         self.require_temperature = require_temperature
         self.usecols = None if usecols is None else list(dict.fromkeys(usecols))
         self.jitter_tolerance = jitter_tolerance
@@ -103,7 +115,7 @@ class ChunkReader:
         nominal = None
         longest = 0.0
         self.n_samples, self.breaks = 0, []
-        frames = self._csv_frames() if self._kind == "csv" else _exact_rows(self._parquet_frames(), self.rows)
+        frames = self._csv_frames() if self._kind == "csv" else _exact_rows(self._parquet_frames(), self.rows, self.first_rows)
         for frame in frames:
             chunk = recordings.recording_from_frame(
                 frame,
@@ -237,6 +249,7 @@ def read_chunks(
     usecols: Sequence[str] | None = None,
     jitter_tolerance: float = 0.5,
     gaps: bool = False,
+    first_rows: int | None = None,
 ) -> ChunkReader:
     """A recording as an iterable of validated chunks of `rows` samples.
 
@@ -258,6 +271,9 @@ def read_chunks(
         Read on past a gap (a chunk may then hold several segments;
         :attr:`ChunkReader.breaks` says where each starts) instead of
         raising :class:`GapError`.
+    first_rows : int, optional
+        Samples of the first chunk of a Parquet file, from which the sample
+        rate is estimated (default `rows`; CSV chunks are all `rows` long).
 
     Returns
     -------
@@ -265,9 +281,9 @@ def read_chunks(
         Iterating it yields :class:`gyrocomp.recordings.Recording` chunks; a second
         iteration reads the file again (not standard input).
     """
-    if rows < 2:
-        raise InputError(f"chunks of {rows} rows; need at least 2")
-    return ChunkReader(path, columns, rows=rows, require_temperature=require_temperature, usecols=usecols, jitter_tolerance=jitter_tolerance, gaps=gaps)
+    if min(rows, rows if first_rows is None else first_rows) < 2:
+        raise InputError(f"chunks of {rows} rows (the first {first_rows}); need at least 2")
+    return ChunkReader(path, columns, rows=rows, require_temperature=require_temperature, usecols=usecols, jitter_tolerance=jitter_tolerance, gaps=gaps, first_rows=first_rows)
 
 
 class TableWriter:
@@ -400,19 +416,21 @@ def _arrow(values) -> "pyarrow.Array":
     return pa.Array.from_buffers(pa.float64(), len(values), [None, pa.py_buffer(values)])
 
 
-def _exact_rows(frames, rows: int):
-    """Re-cut a sequence of column dicts into dicts of exactly `rows` rows (the last one shorter)."""
+def _exact_rows(frames, rows: int, first: int):
+    """Re-cut a sequence of column dicts into dicts of exactly `first`, then `rows` rows (the last one shorter)."""
     pending = []
     held = 0
+    size = first
     for frame in frames:
         length = len(next(iter(frame.values()))) if frame else 0
         if length == 0:
             continue
         pending.append(frame)
         held += length
-        while held >= rows:
-            yield _take(pending, rows)
-            held -= rows
+        while held >= size:
+            yield _take(pending, size)
+            held -= size
+            size = rows
     if held:
         yield _take(pending, held)
 

@@ -172,7 +172,9 @@ def stream_to_files(
     """:func:`to_files` in causal mode, in constant memory: read, compensate and write chunk by chunk.
 
     The recording (a file, or CSV on standard input for ``-``) is read in
-    chunks of `rows` samples (:func:`gyrocomp.streaming.read_chunks`), every
+    chunks of `rows` samples (:func:`gyrocomp.streaming.read_chunks`; default
+    ``CHUNK_ROWS``, and ``FILE_CHUNK_ROWS`` after the first chunk of a Parquet
+    file), every
     axis of each chunk compensated by its
     :class:`~gyrocomp.pipeline.compensate.CausalCompensation` and the chunk
     written at once (``-``: CSV on standard output, flushed after each
@@ -192,12 +194,16 @@ def stream_to_files(
     """
     import warnings
 
-    from gyrocomp import artefacts, streaming
+    from gyrocomp import artefacts, recordings, streaming
     from gyrocomp.pipeline.compensate import COMPENSATION_SCHEMA, CausalCompensation, load_models
 
     recording_path, model_path = inputs
     models = load_models(artefacts.read_json(model_path), str(model_path))
-    chunks = streaming.read_chunks(recording_path, options.columns, rows=rows or streaming.CHUNK_ROWS, require_temperature=True, usecols=[options.columns.temperature])
+    parquet = str(recording_path) != "-" and recordings._kind(str(recording_path)) == "parquet"
+    chunks = streaming.read_chunks(
+        recording_path, options.columns, rows=rows or (streaming.FILE_CHUNK_ROWS if parquet else streaming.CHUNK_ROWS),
+        first_rows=None if rows else streaming.CHUNK_ROWS, require_temperature=True, usecols=[options.columns.temperature],
+    )
 
     def header() -> dict:
         records = [chunks.input_record(), artefacts.file_record(model_path)]

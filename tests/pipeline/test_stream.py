@@ -131,3 +131,19 @@ def test_a_file_with_gaps_is_compensated_whole_by_segments(models, tmp_path):
     n_samples, summaries, _ = stage.compensate_files([source, models["polynomial"]], out)
     assert n_samples == 3_000 and out.read_bytes() == by_segments.read_bytes()
     assert summaries["rate"]["figures"]["compensated_std"] > 0
+
+
+def test_a_parquet_file_streams_in_longer_chunks_after_the_first_with_the_same_output(models, tmp_path, monkeypatch):
+    """Chunks of 300 after a first of 97 (the sample rate's): the table of chunks of 97 throughout, value for value."""
+    source = _long_csv(tmp_path / "long.csv", 3_000)
+    parquet = tmp_path / "long.parquet"
+    pd.read_csv(source).to_parquet(parquet, index=False)
+    assert [len(c.time_s) for c in read_chunks(parquet, rows=300, first_rows=97)] == [97] + [300] * 9 + [3_000 - 97 - 2_700]
+    assert all(len(c.time_s) == 300 for c in read_chunks(source, rows=300, first_rows=97))  # CSV: rows throughout
+    even = tmp_path / "even.parquet"
+    stage.stream_to_files([parquet, models["anfis"]], even, rows=97)
+    monkeypatch.setattr("gyrocomp.streaming.CHUNK_ROWS", 97)
+    monkeypatch.setattr("gyrocomp.streaming.FILE_CHUNK_ROWS", 300)
+    longer = tmp_path / "longer.parquet"
+    stage.stream_to_files([parquet, models["anfis"]], longer)
+    pd.testing.assert_frame_equal(artefacts.read_table(longer, "gyrocomp.compensation")[0], artefacts.read_table(even, "gyrocomp.compensation")[0], check_exact=True)
