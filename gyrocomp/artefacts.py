@@ -104,15 +104,17 @@ def write_table(path: str | os.PathLike, frame: pd.DataFrame, header: dict) -> N
 
 
 def parquet_options(schema) -> dict:
-    """Writer options of every Parquet table: dictionary encoding for the columns that are not floating point only.
+    """Writer options of every Parquet table: dictionary encoding for the columns that are not floating point only, no compression.
 
     Measured values (time, rates, temperatures) hardly ever repeat, so a
     dictionary of them is built and then dropped page after page: 7.2e6
     rows of five float columns took 5.4 s to write with it, 1.5 s without.
+    Nor do their low mantissa bits compress: Snappy made those rows 36.3
+    instead of 40.0 bytes (9 %) for 0.83 instead of 0.60 s of CPU.
     """
     import pyarrow as pa
 
-    return {"use_dictionary": [field.name for field in schema if not pa.types.is_floating(field.type)]}
+    return {"use_dictionary": [field.name for field in schema if not pa.types.is_floating(field.type)], "compression": "none"}
 
 
 def read_table(path: str | os.PathLike, schema: str) -> tuple[pd.DataFrame, dict]:
