@@ -28,7 +28,22 @@ b. **innovations** -- the block-mean residual whitened under the model's
      of the residual's ``tau`` means in units of its standard deviation under
      the model (a step is one large increment where a random walk spreads its
      wander over all of them), with the union bound ``n 2 Phi(-z)``, times
-     the number of taus.
+     the number of taus;
+   * levels (flicker only): a flicker's level is Gaussian, where a noise that
+     switches between a few levels (random telegraph or popcorn noise, mode
+     hops) has a bimodal, light-tailed level. At the shortest ``tau`` the
+     term explains (the most nearly independent means, where the term first
+     dominates the white noise) the residual's ``tau`` means ``u_i``, each
+     in units of its standard deviation under the model (``z_i``), give
+     ``Q = mean He_4(z_i)``, ``He_4(z) = z^4 - 6 z^2 + 3``. Under the model
+     ``E Q = 0`` and ``Var Q = 24 sum_ij rho_ij^4 / k^2`` exactly (Mehler:
+     ``Cov(He_4(z_i), He_4(z_j)) = 4! rho_ij^4``), and a wrong scale moves
+     ``E Q`` only to second order (``3 delta^2``). The lower tail is tested,
+     ``Phi(Q / sd)``: conservative, since ``He_4 >= -6`` makes ``Q``
+     right-skewed. The runs are independent, so their ``Q`` pool into one
+     test, ``sum Q_r / sqrt(sum Var Q_r)``. (A random walk's levels are its
+     own sum; its increments may be heavy-tailed -- jumps -- and are left to
+     the extreme test.)
 
    The score statistics project the whitened columns onto the complement of
    the whitened design, so with the noise known they are exactly
@@ -43,7 +58,11 @@ c. **Allan slope** -- at every octave ``tau`` where the term carries at least
 
 Every test returns a p-value; all tests of a term (on all runs) share
 ``family_alpha`` by Bonferroni, so a noise term that *is* what the model
-says is refused with probability at most ``family_alpha``.
+says is refused with probability at most ``family_alpha``. The tests of the
+term's own statistics -- its level (a), its Allan slope (c), its Gaussian
+levels -- say whether the noise is of the kind claimed (``own_ok``); the
+others may also fail for a structure beside a true noise term (a drift
+beside a flicker).
 
 References
 ----------
@@ -64,7 +83,7 @@ from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.gap import effective_dof
 from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 
-__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "temperature_bins"]
+__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "temperature_bins", "level_test"]
 
 TERMS = ("rate_random_walk", "bias_instability")
 """The noise terms a signature is checked for."""
@@ -103,15 +122,21 @@ class Signature:
         One sentence per failed test (empty when `ok`).
     stats : dict
         ``alpha`` (per test), ``agreement`` (per-run levels, 95 % intervals,
-        statistic, p), ``runs`` (per run: each test's statistic and p).
+        statistic, p), ``levels`` (the pooled Gaussian-levels test), ``runs``
+        (per run: each test's statistic and p).
+    own_ok : bool
+        The tests of the term's own statistics passed (level agreement,
+        Allan slope, Gaussian levels): a failure of the others alone may be a
+        structure beside a true noise term.
     """
 
     ok: bool
     reasons: tuple
     stats: dict
+    own_ok: bool = True
 
 
-def check(term, runs, model, settings: SignatureSettings = SignatureSettings()) -> Signature:
+def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), extra=None) -> Signature:
     """Whether noise `term` of `model` shows its own signature on `runs`.
 
     Parameters
@@ -126,6 +151,10 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings()) 
         model); its ``spec`` (deterministic shapes, coefficients refitted on
         each run) and ``noise`` are used.
     settings : SignatureSettings
+    extra : sequence of ndarray, optional
+        Block-level columns added to each run's design (one array of shape
+        ``(n_blocks, q)`` per run): the term judged beside structures found
+        in the residual (:func:`gyrocomp.diagnose.unexplained.confirm`).
 
     Returns
     -------
@@ -137,8 +166,10 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings()) 
     s = settings
     level = getattr(model.noise, term)
     if not level > 0.0:
-        return Signature(False, (f"{term} has level 0 in the model",), {})
+        return Signature(False, (f"{term} has level 0 in the model",), {}, False)
     designs = [p.design_blocks(model.spec)[0] for p in runs]
+    if extra is not None:
+        designs = [np.hstack([X, G]) for X, G in zip(designs, extra)]
     free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
     per_run, own = [], []
     for p, X in zip(runs, designs):
@@ -147,13 +178,15 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings()) 
         per_run.append({"noise": own[-1].datasheet_units(), **_run_tests(p, X, own[-1], term, s)})
     agreement = _agreement(runs, designs, model.noise, term, s) if len(runs) > 1 else None
     replication = _replication(runs, designs, own, s) if len(runs) > 1 else []
+    levels = _pooled_levels([out.pop("levels") for out in per_run if "levels" in out])
     n_tests = sum(len([k for k in out if k not in ("noise", "allan")]) + len(out["allan"]) for out in per_run)
-    n_tests += len(replication) + (agreement is not None)
+    n_tests += len(replication) + (agreement is not None) + (levels is not None)
     alpha = s.family_alpha / max(n_tests, 1)
-    reasons = []
+    reasons, own_failed = [], False
     for p, out in zip(runs, per_run):
         for point in out["allan"]:
             if point["p"] < alpha:
+                own_failed = True
                 reasons.append(
                     f"{p.run.name}: Allan variance at tau {point['tau_s']:.0f} s is {point['ratio']:.2f} times the "
                     f"{term} model's (p = {point['p']:.2g}): the slope it claims does not hold"
@@ -162,16 +195,34 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings()) 
             if name in out and out[name]["p"] < alpha:
                 reasons.append(f"{p.run.name}: {what} (p = {out[name]['p']:.2g})")
     if agreement is not None and agreement["p"] < alpha:
-        levels = ", ".join(f"{v:.3g}" for v in agreement["level"])
-        reasons.append(f"the runs disagree on the {term} level ({levels} {agreement['unit']}; p = {agreement['p']:.2g})")
+        own_failed = True
+        values = ", ".join(f"{v:.3g}" for v in agreement["level"])
+        reasons.append(f"the runs disagree on the {term} level ({values} {agreement['unit']}; p = {agreement['p']:.2g})")
+    if levels is not None and levels["p"] < alpha:
+        own_failed = True
+        kurt = ", ".join(f"{k:+.2f}" for k in levels["kurtosis"])
+        reasons.append(
+            f"the residual's {levels['tau_s'][0]:.0f} s level is bimodal, not the Gaussian level of flicker (excess kurtosis "
+            f"{kurt} on the model's scale; p = {levels['p']:.2g}): a noise switching between a few levels (telegraph, popcorn)"
+        )
     for rep in replication:
         if rep["p"] < alpha:
             reasons.append(
                 f"the {rep['of']} residual of {rep['source']} repeats in {rep['target']} (p = {rep['p']:.2g}): "
                 "a deterministic effect, where a random wander would not repeat"
             )
-    stats_out = {"alpha": alpha, "n_tests": n_tests, "agreement": agreement, "replication": replication, "runs": per_run}
-    return Signature(not reasons, tuple(reasons), stats_out)
+    stats_out = {"alpha": alpha, "n_tests": n_tests, "agreement": agreement, "levels": levels, "replication": replication, "runs": per_run}
+    return Signature(not reasons, tuple(reasons), stats_out, not own_failed)
+
+
+def _pooled_levels(tests):
+    """One Gaussian-levels test of independent runs: ``sum Q_r / sqrt(sum Var Q_r)`` (None without any)."""
+    if not tests:
+        return None
+    q = [t["kurtosis"] for t in tests]
+    var = [t["var"] for t in tests]
+    stat = float(np.sum(q) / np.sqrt(np.sum(var)))
+    return {"stat": stat, "p": float(stats.norm.cdf(stat)), "kurtosis": q, "tau_s": [t["tau_s"] for t in tests]}
 
 
 _WHAT = {
@@ -282,7 +333,9 @@ def _run_tests(problem, X, noise: NoiseModel, term, s: SignatureSettings):
         out["temperature"] = {"stat": stat, "dof": dof, "p": p}
     out["step"] = step_scan(e, Xw, lower, s.min_step_blocks)
     out["step"]["time_s"] = out["step"]["block"] * problem.basis.block_s
-    out["allan"], out["extreme"] = _timescales(problem, X, cov, lower, Xw, noise, term, s)
+    out["allan"], out["extreme"], levels = _timescales(problem, X, cov, lower, Xw, noise, term, s)
+    if levels is not None:
+        out["levels"] = levels
     return out
 
 
@@ -346,7 +399,7 @@ def _allan_taus(problem, noise: NoiseModel, term, s: SignatureSettings):
 
 
 def _timescales(problem, X, cov, lower, Xw, noise, term, s):
-    """Tests (c) and (b, extreme) at the taus `term` explains.
+    """Tests (c), (b, extreme) and (b, levels) at the taus `term` explains.
 
     The residual's non-overlapping AVAR against its exact moments, and the
     largest increment of the ``tau`` means in units of its standard
@@ -355,7 +408,7 @@ def _timescales(problem, X, cov, lower, Xw, noise, term, s):
     """
     ms = _allan_taus(problem, noise, term, s)
     if not ms.size:
-        return [], {"stat": 0.0, "p": 1.0}
+        return [], {"stat": 0.0, "p": 1.0}, None
     y = problem.y
     n = y.size
     # r = R y with R = I - X (Xw' Xw)^-1 Xw' L^-1: the GLS residual; under the model Cov(r) = R Sigma R'.
@@ -363,10 +416,13 @@ def _timescales(problem, X, cov, lower, Xw, noise, term, s):
     resid_maker = np.eye(n) - X @ pinv @ linalg.solve_triangular(lower, np.eye(n), lower=True, check_finite=False)
     r = resid_maker @ y
     cov_r = resid_maker @ cov @ resid_maker.T
-    allan, extreme = [], {"stat": 0.0, "p": 1.0}
+    allan, extreme, levels = [], {"stat": 0.0, "p": 1.0}, None
     for m in ms:
         k = n // m
         agg = np.hstack([np.kron(np.eye(k), np.full((1, m), 1.0 / m)), np.zeros((k, n - k * m))])
+        if term == "bias_instability" and levels is None:
+            # The shortest tau flicker explains: its Gaussian level (module docstring, levels).
+            levels = level_test(agg @ r, agg @ cov_r @ agg.T) | {"tau_s": float(m * problem.basis.block_s)}
         diff = np.diff(agg, axis=0)
         form = diff / np.sqrt(2.0 * (k - 1))
         avar = float(np.sum((form @ r) ** 2))
@@ -382,7 +438,39 @@ def _timescales(problem, X, cov, lower, Xw, noise, term, s):
             # Bonferroni over the taus tried: the smallest p times their number.
             j = int(np.argmax(z))
             extreme = {"stat": float(z.max()), "tau_s": float(m * problem.basis.block_s), "time_s": float((j + 1) * m * problem.basis.block_s), "p": p_max * ms.size}
-    return allan, extreme
+    return allan, extreme, levels
+
+
+def level_test(u, cov):
+    """Whether the Gaussian levels `u` with covariance `cov` are bimodal (light-tailed): the lower tail of ``mean He_4(z)``.
+
+    ``z_i = u_i / sqrt(cov_ii)``; ``Q = mean(z^4 - 6 z^2 + 3)`` has mean 0
+    and variance ``24 sum_ij rho_ij^4 / k^2`` when ``u ~ N(0, cov)``
+    (module docstring, levels). A noise switching between two levels has
+    ``He_4`` near ``-2`` at every level, a Gaussian one 0 on average.
+
+    Returns
+    -------
+    dict
+        ``stat`` (``Q`` over its standard deviation), ``kurtosis`` (``Q``,
+        the levels' excess kurtosis on the model's scale), ``var``
+        (``Var Q``), ``p`` (``Phi(stat)``).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> gaussian = level_test(rng.standard_normal(400), np.eye(400))
+    >>> two_levels = level_test(rng.choice([-1.0, 1.0], 400) + 0.3 * rng.standard_normal(400), 1.09 * np.eye(400))
+    >>> bool(gaussian["p"] > 0.01), bool(two_levels["p"] < 1e-6)
+    (True, True)
+    """
+    sd = np.sqrt(np.diag(cov))
+    z = u / sd
+    rho = cov / np.outer(sd, sd)
+    q = float(np.mean(z**4 - 6.0 * z**2 + 3.0))
+    var = float(24.0 * np.sum(rho**4) / z.size**2)
+    stat = q / np.sqrt(var)
+    return {"stat": stat, "kurtosis": q, "var": var, "p": float(stats.norm.cdf(stat))}
 
 
 def _replication(runs, designs, noises, s: SignatureSettings):

@@ -173,11 +173,18 @@ def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSett
     1. a noise term that does not show its own signature on all runs
        (:func:`gyrocomp.diagnose.signature.check`: its level agrees between
        the runs, its innovations are white without trend or temperature
-       dependence, its Allan slope holds) and that, beside the deterministic
-       structures the tests find on the fit run in its place (the model
-       without it), gains at most ``bic_margin`` (:func:`gain_beside`): it
-       absorbs what the vocabulary does not explain. A true flicker beside a
-       drift keeps its place (the drift is reported);
+       dependence, its Allan slope holds, a flicker's level is Gaussian) and
+       that, beside the deterministic structures the tests find on the fit
+       run in its place (the model without it), gains at most
+       ``bic_margin`` (:func:`gain_beside`): it absorbs what the vocabulary
+       does not explain. A true flicker beside a drift keeps its place (the
+       drift is reported) -- unless the tests of its own statistics (level
+       agreement, Allan slope, Gaussian levels) refuse it, and still refuse
+       it with that structure in the fit run's design: then the wander is
+       not that noise. When the tests find nothing in its place,
+       the term goes if its own statistics refused it (at the signature's
+       false-refusal rate) and stays if only the other tests did (a trend
+       beside it);
     2. otherwise an effect with per-run columns (a periodic disturbance's
        phase and amplitude) that the holdout does not need at the effect's
        fitted shape (:func:`replication`, p above ``replication_alpha``);
@@ -234,13 +241,33 @@ def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSett
         lost = {e: replication(held, model, e) for e in chosen if KINDS[e].per_run and held is not None}
         lost = {e: p for e, p in lost.items() if p > s.replication_alpha}
         fit_p = next((p for label, p in runs if label == "fit"), None)
-        standing_in = {t: g for t in failing if (g := _gain_in_place(search, fit_p, model, t, s)) <= search.margin}
+        in_place = {t: _in_place(search, fit_p, model, t, s) for t in failing}
+        # A term that gains little beside the structure found in its place stands in for it; one whose own
+        # statistics (level, slope, distribution) refuse it, with nothing found in its place or still beside
+        # what was found, is not that noise. A failure of the other tests alone may be a structure beside it.
+        standing_in = {}
+        for t, (g, G) in in_place.items():
+            if g is not None and g <= search.margin:
+                standing_in[t] = g
+            elif not result["signatures"][t]["own_ok"] and (
+                G is None or not signature.check(t, [p for _, p in runs], model, signature_settings,
+                                                 [G if p is fit_p else np.empty((p.y.size, 0)) for _, p in runs]).own_ok
+            ):
+                standing_in[t] = -np.inf
         if standing_in:
             effect = min(standing_in, key=standing_in.get)
-            entry = {"effect": effect, "gain": float(standing_in[effect]), "holdout": True, "reason":
-                     "it does not show its own signature (" + "; ".join(result["signatures"][effect]["reasons"][:2])
-                     + f") and gains {standing_in[effect]:.1f} in BIC (<= {search.margin:g}) beside the structure the tests "
-                     "find on the fit run in its place"}
+            why = "; ".join(result["signatures"][effect]["reasons"][:2])
+            gain, G = in_place[effect]
+            if gain is None or gain > search.margin:
+                where = "nor beside the structure the tests find on the fit run in its place" if G is not None else (
+                    "and the tests find no structure on the fit run in its place")
+                entry = {"effect": effect, "gain": None if gain is None else float(gain), "holdout": True, "reason":
+                         f"its own statistics are not those of {effect.replace('_', ' ')} ({why}), {where}: "
+                         "it stands in for a residual the vocabulary does not explain"}
+            else:
+                entry = {"effect": effect, "gain": float(gain), "holdout": True, "reason":
+                         f"it does not show its own signature ({why}) and gains {gain:.1f} in BIC "
+                         f"(<= {search.margin:g}) beside the structure the tests find on the fit run in its place"}
         elif lost:
             effect = max(lost, key=lost.get)
             entry = {"effect": effect, "gain": None, "holdout": True, "reason":
@@ -291,24 +318,25 @@ def replication(problem, model, effect):
     return float(stats.chi2.sf(max(without - with_it, 0.0), int(own.sum())))
 
 
-def _gain_in_place(search, problem, model, term, s: UnexplainedSettings):
-    """:func:`gain_beside` of noise `term` beside the structures the tests find on the fit run without it.
+def _in_place(search, problem, model, term, s: UnexplainedSettings):
+    """:func:`gain_beside` of noise `term` beside the structures the tests find on the fit run without it, and their columns.
 
     The deterministic tests of the fit run under the model without `term`
     (Holm at ``family_alpha`` over that run's tests), the findings that say
     the same thing reported once (:meth:`_Prepared.explain`); with none,
-    ``inf`` (the term stands in for nothing a test describes).
+    ``(None, None)`` (no structure a test describes takes its place).
     """
     if problem is None:
-        return np.inf
+        return None, None
     pr = _Prepared("fit", problem, search.without(model, term), s)
     names = list(pr.tests)
     rejected = holm([pr.tests[k]["p"] for k in names], s.family_alpha)
     found = [k for k, r in zip(names, rejected) if r and not k.startswith("noise_")]
     kept = [k for k in pr.explain(found, s.family_alpha / max(len(names), 1)) if not k.startswith("noise_")]
     if not kept:
-        return np.inf
-    return gain_beside(problem, model, term, pr.structure(kept))
+        return None, None
+    G = pr.structure(kept)
+    return gain_beside(problem, model, term, G), G
 
 
 def gain_beside(problem, model, effect, G):
@@ -353,7 +381,7 @@ def _verdict(runs, model, settings, baseline_residuals, signature_settings):
     for term in TERMS:
         if term in getattr(model, "order", ()) and getattr(model.noise, term) > 0.0:
             sig = signature.check(term, [p for _, p in runs], model, signature_settings)
-            signatures[term] = {"ok": sig.ok, "reasons": list(sig.reasons)}
+            signatures[term] = {"ok": sig.ok, "own_ok": sig.own_ok, "reasons": list(sig.reasons)}
             if not sig.ok:
                 where.append({"run": "all", "test": f"signature:{term}", "p": sig.stats.get("alpha")})
                 hints.append(f"the selected {term} does not show its own signature: " + "; ".join(sig.reasons[:3]))

@@ -38,6 +38,10 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0, bias=0.0, hours=8.0, fs=1.0)
         x += amp * np.exp(-0.5 * ((temp - 45.0) / 3.0) ** 2)
     elif kind == "ramp":
         x += amp * t / t[-1]
+    elif kind == "telegraph":
+        # random telegraph levels +-amp/2, exponential dwell of 500 s mean (popcorn noise)
+        switches = np.cumsum(rng.exponential(500.0, size=int(4 * t[-1] / 500.0) + 16))
+        x += amp * np.where(np.searchsorted(switches, t, side="right") % 2 == 0, 0.5, -0.5)
     return t, x, temp, fs
 
 
@@ -131,6 +135,33 @@ def test_step_scan_false_alarm_rate_and_power():
     y = rng.standard_normal(n) + 1.0 * (np.arange(n) >= 120)
     found = sg.step_scan(y - y.mean(), X, lower)
     assert found["p"] < 1e-6 and abs(found["block"] - 120) <= 6 and found["size"] == pytest.approx(1.0, abs=0.3)
+
+
+def test_telegraph_noise_is_not_flicker():
+    # popcorn noise of 10 deg/h between its two levels under the white noise: a flicker fits its spectrum,
+    # but its level at the shortest tau flicker explains is bimodal
+    result = _check("bias_instability", "telegraph", 0.003, seed=21)
+    assert not result.ok and not result.own_ok
+    assert any("bimodal" in r for r in result.reasons), result.reasons
+    assert result.stats["levels"]["p"] < 1e-4 and all(k < -0.5 for k in result.stats["levels"]["kurtosis"])
+
+
+def test_flicker_levels_pass_at_their_rate():
+    # a true flicker's level test on the two runs is N(0, 1) or lighter in its lower tail: p below 0.05 in
+    # at most about 5 % of pairs (8 pairs: at most 2), never near the Bonferroni share of 1 %
+    p = np.array([_check("bias_instability", bias=3.0 / 3600.0, seed=s).stats["levels"]["p"] for s in range(30, 38)])
+    assert np.sum(p < 0.05) <= 2 and p.min() > 1e-3, p
+
+
+def test_level_test_is_calibrated_on_correlated_gaussian_levels():
+    # AR(1) levels (rho 0.8) of 300 means: Q / sd is about N(0, 1) (mean and variance exact), its lower tail no heavier
+    rng = np.random.default_rng(4)
+    n, phi = 300, 0.8
+    cov = phi ** np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+    lower = np.linalg.cholesky(cov)
+    z = np.array([sg.level_test(lower @ rng.standard_normal(n), cov)["stat"] for _ in range(2000)])
+    assert abs(z.mean()) < 0.1 and 0.85 < z.std() < 1.15
+    assert np.mean(z < stats.norm.ppf(0.01)) <= 0.01 + 3.0 * np.sqrt(0.01 * 0.99 / 2000)
 
 
 def test_unknown_term():

@@ -230,6 +230,66 @@ def test_a_noise_term_failing_its_signature_is_unlisted():
     assert "signature" in v["unlisted"][0]["reason"]
 
 
+def _telegraph_pair(seed, amp):
+    """`confirm` of a flicker fitted to runs with their own random telegraph noise (levels +-amp/2, dwell 300 s)."""
+    from gyrocomp.diagnose.select import Search
+
+    scale, runs = None, []
+    for label, k in (("fit", seed), ("holdout", seed + 500)):
+        t, x, temp = _recording(k)
+        x = x + amp * _telegraph(np.random.default_rng(k + 7), t.size, 300.0)
+        scale = scale or TemperatureScale.of(temp)
+        runs.append((label, Problem(Run(label, t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), scale, 3)))
+    search = Search([runs[0][1]], [])
+    return ux.confirm(search, runs, extend(runs[0][1], search.baseline, "bias_instability"))
+
+
+def test_a_flicker_standing_in_for_telegraph_noise_is_unlisted():
+    # 11 deg/h between the two levels: the flicker's level is bimodal (its own statistics refuse it)
+    model, v = _telegraph_pair(2, 0.003)
+    assert model.order == ()
+    assert v["present"] and v["unlisted"][0]["effect"] == "bias_instability"
+    assert "bimodal" in v["unlisted"][0]["reason"]
+
+
+def _flicker_pair(seed, noise):
+    """`confirm` of a flicker fitted on the fit run; `noise(rng, n)` [deg/s] drawn for each run and added to it."""
+    from gyrocomp.diagnose.select import Search
+
+    scale, runs = None, []
+    for label, k, add in (("fit", seed, noise[0]), ("holdout", seed + 500, noise[1])):
+        t, x, temp = _recording(k)
+        x = x + add(np.random.default_rng(k + 7), t.size)
+        scale = scale or TemperatureScale.of(temp)
+        runs.append((label, Problem(Run(label, t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), scale, 3)))
+    search = Search([runs[0][1]], [])
+    return ux.confirm(search, runs, extend(runs[0][1], search.baseline, "bias_instability"))
+
+
+def test_a_flicker_the_runs_disagree_on_is_unlisted():
+    # flicker of 7 deg/h on the fit run and 29 deg/h on the holdout: it gains its place beside the drift
+    # found on the fit run in its place, but its own statistics (the level agreement) refuse it there too
+    from gyrocomp.sim.noise import flicker
+
+    model, v = _flicker_pair(1, [lambda rng, n, b=b: flicker(n, 1.0, b * 3600.0, rng) for b in (0.002, 0.008)])
+    assert model.order == ()
+    assert v["present"] and v["unlisted"][0]["effect"] == "bias_instability"
+    assert "disagree" in v["unlisted"][0]["reason"] and "nor beside" in v["unlisted"][0]["reason"]
+
+
+def test_a_flicker_refused_only_for_whiteness_stays():
+    # a Gauss-Markov noise (40 s, 18 deg/h) taken as flicker: the holdout's innovations are correlated, its own
+    # statistics (level, slope, Gaussian levels) are flicker's, and nothing is found in its place: it stays
+    from scipy import signal
+
+    phi = np.exp(-1.0 / 40.0)
+    markov = lambda rng, n: signal.lfilter([1.0], [1.0, -phi], 0.005 * np.sqrt(1.0 - phi**2) * rng.standard_normal(n))
+    model, v = _flicker_pair(1, [markov, markov])
+    assert model.order == ("bias_instability",)
+    sig = v["signatures"]["bias_instability"]
+    assert v["present"] and not sig["ok"] and sig["own_ok"] and v["unlisted"] == []
+
+
 def test_an_explained_recording_is_left_alone():
     # a true ramp and nothing else: the verdict is absent and confirm changes nothing
     model, v = _confirmed(lambda t: 0.003 * t / t[-1], 8, ("rate_ramp",))
