@@ -420,14 +420,16 @@ def _n_params(effects, spec: dict) -> int:
 
 
 def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_problems=()) -> dict:
-    """Grid search (then bounded refinement in log scale) of the effect's nonlinear parameter.
+    """Grid search (then bounded refinement in log scale) of the effect's nonlinear parameter, in its best form.
 
-    An effect with nested :attr:`~gyrocomp.sim.vocabulary.Effect.forms`
-    instead takes the form of lowest BIC, ``-2 log L + k ln n`` with ``k``
-    its parameter count and ``n`` the blocks of the runs: a richer form's
-    extra columns earn their place like an effect's (a temperature-rate
-    asymmetry that is not there must not charge a symmetric sensitivity
-    a parameter its look-alike, a short thermal lag, does not pay).
+    An effect with :attr:`~gyrocomp.sim.vocabulary.Effect.forms` takes the
+    form of lowest BIC, ``-2 log L + k ln n`` with ``k`` the form's
+    parameter count and ``n`` the blocks of the runs, each form at its own
+    best nonlinear parameter: a richer form's extra columns earn their
+    place like an effect's (a temperature-rate asymmetry that is not there
+    must not charge a symmetric sensitivity a parameter its look-alike, a
+    short thermal lag, does not pay), and between forms with as many
+    parameters the likelihood decides (a hysteresis relay or play).
 
     Every parameter is refined between the grid's neighbours of the best
     point, the hysteresis deadband too: a relay's switching width is
@@ -441,39 +443,43 @@ def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_probl
     :func:`joint_gain`) the deviance is summed over the runs, the per-run
     columns separate and the rest shared.
     """
-    s = problem.settings
-    run = problem.run
+    kind = KINDS[effect]
+    if not kind.nonlinear and not kind.forms:
+        return {}
+    parts = [_JointPart(problem, current, effect)] + [_JointPart(p, m, effect) for p, m in others_problems]
+    log_n = np.log(sum(part.y_w.size for part in parts))
+    fitted = [_best_in_form(problem, parts, effect, dict(form)) for form in kind.forms or ({},)]
+    bic = [value + kind.n_params_of(params) * log_n for params, value in fitted]
+    return fitted[int(np.argmin(bic))][0]
+
+
+def _best_in_form(problem: Problem, parts, effect: str, form: dict):
+    """The nonlinear parameter of `effect` in one of its forms (:func:`_best_nonlinear`): ``(params, -2 log L)``."""
     kind = KINDS[effect]
     key = kind.nonlinear
-    if not key and not kind.forms:
-        return {}
-    length_s = run.n_blocks * run.block_s
-    parts = [_JointPart(problem, current, effect)] + [_JointPart(p, m, effect) for p, m in others_problems]
 
     def deviance(params):
         return float(_joint_deviance(parts, params, effect).sum())
 
     if not key:
-        log_n = np.log(sum(part.y_w.size for part in parts))
-        bic = [deviance(form) + kind.n_params_of(form) * log_n for form in kind.forms]
-        return dict(kind.forms[int(np.argmin(bic))])
-
-    grid = KINDS[effect].grid(s, length_s, run.block_s)
+        return form, deviance(form)
+    run = problem.run
+    grid = kind.grid(problem.settings, run.n_blocks * run.block_s, run.block_s)
     fixed = {}
     if effect == "periodic":
-        values, fixed = _periodic_waveform(parts, grid, s, length_s, run.block_s)
+        values, fixed = _periodic_waveform(parts, grid, problem.settings, run.n_blocks * run.block_s, run.block_s)
     else:
-        values = np.array([deviance({key: float(v)}) for v in grid])
+        values = np.array([deviance(form | {key: float(v)}) for v in grid])
     i = int(np.argmin(values))
     a, b = sorted((np.log(grid[max(i - 1, 0)]), np.log(grid[min(i + 1, grid.size - 1)])))
-    best_value = deviance({key: float(grid[i]), **fixed})
+    best_value = deviance(form | {key: float(grid[i]), **fixed})
     if b > a:
         best = optimize.minimize_scalar(
-            lambda z: deviance({key: float(np.exp(z)), **fixed}), bounds=(a, b), method="bounded", options={"xatol": 1e-3}
+            lambda z: deviance(form | {key: float(np.exp(z)), **fixed}), bounds=(a, b), method="bounded", options={"xatol": 1e-3}
         )
         if best.fun < best_value:
-            return {key: float(np.exp(best.x)), **fixed}
-    return {key: float(grid[i]), **fixed}
+            return form | {key: float(np.exp(best.x)), **fixed}, float(best.fun)
+    return form | {key: float(grid[i]), **fixed}, best_value
 
 
 def _periodic_waveform(parts, periods, settings, length_s, block_s):

@@ -5,7 +5,7 @@ one contribution to the gyro's bias, vectorised over the whole recording.
 The names follow the effect vocabulary of DESIGN.md ("The simulator and the
 sim-to-real gap"): ``thermal_lag`` (:func:`element_temperature`),
 ``temp_rate`` (:func:`temperature_rate`), ``hysteresis``
-(:func:`hysteresis_branch`), ``warmup``, ``rate_ramp`` and ``periodic``;
+(:func:`hysteresis_branch`, :func:`hysteresis_play`), ``warmup``, ``rate_ramp`` and ``periodic``;
 the baseline's temperature polynomial is :func:`bias_polynomial`.
 `gyrocomp diagnose` fits the same shapes to real recordings.
 
@@ -24,6 +24,7 @@ __all__ = [
     "element_temperature",
     "temperature_rate",
     "hysteresis_branch",
+    "hysteresis_play",
     "first_excursion",
     "warmup",
     "rate_ramp",
@@ -195,6 +196,68 @@ def hysteresis_branch(time_s, temperature_c, deadband_c):
         switch = _next_reversal(temperature, start, state, deadband_c)
         out[start:switch] = state
         start, state = switch, -state
+    return out
+
+
+def hysteresis_play(time_s, temperature_c, width_c):
+    """Output in [-1, 1] of a play (backlash) operator of width `width_c`: ``(T - p) / (w / 2)``, ``p`` kept within ``w / 2`` of T.
+
+    After a reversal the output moves linearly from one branch to the other
+    over a temperature change of `width_c`, then follows it; through a soak
+    it holds. It is the mean of relays whose widths are spread evenly over
+    ``[0, w]`` (Preisach; Krasnosel'skii & Pokrovskii [1]), the other limit
+    of the two-branch relay :func:`hysteresis_branch`: it switches at the
+    same reversals, and between two of them sits
+    ``1 - (max T - T) / (w / 2)`` on the heating branch and
+    ``-1 + (T - min T) / (w / 2)`` on the cooling one (extremes since the
+    switch). Before the first excursion beyond the play
+    (:func:`first_excursion`) the state at power-on is not known: the play
+    starts centred, ``p = T_0`` (output 0), and from there on an unknown
+    start only adds a constant (while the temperature stays within the play).
+
+    Parameters
+    ----------
+    time_s : array_like, shape (n,)
+        Time [s] (only checked for shape and order).
+    temperature_c : array_like, shape (n,)
+        Temperature [degC].
+    width_c : float
+        Width of the play [degC] (> 0).
+
+    Returns
+    -------
+    numpy.ndarray of float, shape (n,)
+
+    References
+    ----------
+    .. [1] M. A. Krasnosel'skii, A. V. Pokrovskii, *Systems with Hysteresis*, Springer (1989), ch. 1.
+
+    Examples
+    --------
+    >>> hysteresis_play(np.arange(7.0), [20, 20.5, 22, 24, 23, 21, 21], 2.0).tolist()
+    [0.0, 0.5, 1.0, 1.0, 0.0, -1.0, -1.0]
+    """
+    if not width_c > 0:
+        raise InputError(f"hysteresis: width_c = {width_c!r} must be > 0")
+    branch = hysteresis_branch(time_s, temperature_c, width_c)
+    temperature = np.asarray(temperature_c, dtype=float)
+    out = np.empty(temperature.size)
+    half = 0.5 * width_c
+    first = first_excursion(temperature, width_c)
+    p = temperature[0] if temperature.size else 0.0
+    for i in range(first):  # within the play of the power-on temperature: one pass, then the vectorised branches
+        p = min(max(p, temperature[i] - half), temperature[i] + half)
+        out[i] = (temperature[i] - p) / half
+    switches = np.flatnonzero(np.diff(branch[first:])) + 1 + first
+    edges = np.concatenate([[first], switches, [temperature.size]]).astype(int)
+    for a, b in zip(edges[:-1], edges[1:]):
+        if a == b:  # no excursion beyond the play at all
+            continue
+        seg = temperature[a:b]
+        if branch[a] > 0:
+            out[a:b] = 1.0 - (np.maximum.accumulate(seg) - seg) / half
+        else:
+            out[a:b] = -1.0 + (seg - np.minimum.accumulate(seg)) / half
     return out
 
 

@@ -27,6 +27,8 @@ thermal_lag         ``tau_s``           ``thermal_lag_tau_s``      yes
 temp_rate           (form: symmetric    --                         yes
                     or asymmetric)
 hysteresis          ``deadband_c``      ``hysteresis_deadband_c``  yes
+                    (form: relay or
+                    play)
 warmup              ``tau_s``           ``warmup_tau_s``           no
 rate_ramp           --                  --                         no
 periodic            ``period_s``, H     ``periodic_*`` (Fourier)   no

@@ -59,10 +59,11 @@ class Effect(abc.ABC):
         amplitude (:meth:`amplitude`; detection limits); None: all of them,
         averaged (a sinusoid's phases).
     forms : tuple of dict
-        Nested forms, plainest first, as ``params`` of :meth:`columns`
-        (``temp_rate``: one sensitivity, then heating and cooling apart),
-        for an effect without a nonlinear parameter. The diagnosis fits the
-        form of lowest BIC (:meth:`n_params_of` counts its parameters): a
+        The effect's forms, plainest first, as ``params`` of :meth:`columns`
+        beside the nonlinear parameter (``temp_rate``: one sensitivity, or
+        heating and cooling apart; ``hysteresis``: a relay or a play). The
+        diagnosis fits each (its nonlinear parameter too) and keeps the one
+        of lowest BIC (:meth:`n_params_of` counts its parameters): a
         richer form's extra columns must earn their place like an effect.
     """
 

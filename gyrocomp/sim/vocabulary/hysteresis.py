@@ -6,23 +6,43 @@ import dataclasses
 
 import numpy as np
 
+from gyrocomp.errors import InputError
 from gyrocomp.sim.vocabulary._base import Effect
 from gyrocomp.sim import effects as shapes
 from gyrocomp.sim.profile import unit_field
 
 
+OPERATORS = {"relay": shapes.hysteresis_branch, "play": shapes.hysteresis_play}
+"""The hysteresis operators by name: two-branch relay, play (backlash); both ``f(time_s, temperature_c, width_c)``."""
+
+
 @dataclasses.dataclass(frozen=True)
 class Hysteresis:
-    """``hysteresis``: bias ``+A`` on the heating branch and ``-A`` on the cooling branch
-    (:func:`~gyrocomp.sim.effects.hysteresis_branch`)."""
+    """``hysteresis``: bias ``A`` times a hysteresis operator of width ``deadband_c``:
+    ``relay``, ``+A`` on the heating branch and ``-A`` on the cooling one
+    (:func:`~gyrocomp.sim.effects.hysteresis_branch`), or ``play``, moving
+    linearly between them over ``deadband_c`` after each reversal
+    (:func:`~gyrocomp.sim.effects.hysteresis_play`)."""
 
     enabled: bool = False
     amplitude_dps: float = unit_field(0.01, "deg/s")
     deadband_c: float = unit_field(0.5, "degC")
+    operator: str = "relay"
+
+    def __post_init__(self):
+        if self.operator not in OPERATORS:
+            raise InputError(f"[gyro.hysteresis] operator = {self.operator!r}: one of {', '.join(OPERATORS)}")
 
 
 class _Hysteresis(Effect):
-    """Columns: the heating (+1) / cooling (-1) branch of a play operator of width ``deadband_c``, and the power-on part.
+    """Columns: the operator's output (relay: heating +1 / cooling -1 branch; play: moving between them) for a width ``deadband_c``, and the power-on part.
+
+    The relay and the play are the two limits of a spread of switching
+    widths (a Preisach model): one width, or widths spread evenly up to
+    ``deadband_c``. They are the effect's :attr:`forms`, with the same
+    parameters; the diagnosis fits each over the width grid and keeps the
+    one of lowest BIC (a play fitted by a relay leaves its ramps between
+    the branches, slow structure a random walk then absorbs).
 
     The branch the part was left in before power-on is not in the recording:
     until the temperature first moves beyond the play
@@ -40,14 +60,15 @@ class _Hysteresis(Effect):
     n_params = 3
     per_run = ("hysteresis_power_on",)
     unit_columns = 1
+    forms = tuple({"operator": name} for name in OPERATORS)
 
     def bias(self, time_s, housing_c, gyro):
         h = gyro.hysteresis
-        return h.amplitude_dps * shapes.hysteresis_branch(time_s, housing_c, h.deadband_c)
+        return h.amplitude_dps * OPERATORS[h.operator](time_s, housing_c, h.deadband_c)
 
     def columns(self, run, params, poly_degree=3, scale=None):
         d = params["deadband_c"]
-        branch = shapes.hysteresis_branch(run.time_s, run.temperature_c, d)
+        branch = OPERATORS[params.get("operator", "relay")](run.time_s, run.temperature_c, d)
         power_on = np.arange(branch.size) < shapes.first_excursion(run.temperature_c, d)
         return np.column_stack([branch, power_on]), [self.name, *self.per_run]
 
@@ -58,6 +79,7 @@ class _Hysteresis(Effect):
         return {
             "amplitude_dps": {"value": coef[self.name], "unit": "deg/s"},
             "deadband_c": {"value": params["deadband_c"], "unit": "degC"},
+            "operator": {"value": params.get("operator", "relay"), "unit": ""},
         }
 
 
