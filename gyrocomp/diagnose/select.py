@@ -464,51 +464,62 @@ def _best_in_form(problem: Problem, parts, effect: str, form: dict):
     if not key:
         return form, deviance(form)
     run = problem.run
-    grid = kind.grid(problem.settings, run.n_blocks * run.block_s, run.block_s)
-    fixed = {}
+    length_s = run.n_blocks * run.block_s
+    grid = kind.grid(problem.settings, length_s, run.block_s)
     if effect == "periodic":
-        values, fixed = _periodic_waveform(parts, grid, problem.settings, run.n_blocks * run.block_s, run.block_s)
-    else:
-        values = np.array([deviance(form | {key: float(v)}) for v in grid])
+        return _periodic_waveform(parts, grid, problem.settings, length_s, run.block_s, lambda p: deviance(form | p))
+    values = np.array([deviance(form | {key: float(v)}) for v in grid])
+    value, best = _refine(grid, values, lambda v: deviance(form | {key: v}))
+    return form | {key: value}, best
+
+
+def _refine(grid, values, deviance):
+    """The grid point of least deviance refined (bounded, in log scale) between its neighbours: ``(value, deviance)``."""
     i = int(np.argmin(values))
     a, b = sorted((np.log(grid[max(i - 1, 0)]), np.log(grid[min(i + 1, grid.size - 1)])))
-    best_value = deviance(form | {key: float(grid[i]), **fixed})
     if b > a:
         best = optimize.minimize_scalar(
-            lambda z: deviance(form | {key: float(np.exp(z)), **fixed}), bounds=(a, b), method="bounded", options={"xatol": 1e-3}
+            lambda z: deviance(float(np.exp(z))), bounds=(a, b), method="bounded", options={"xatol": 1e-3}
         )
-        if best.fun < best_value:
-            return form | {key: float(np.exp(best.x)), **fixed}, float(best.fun)
-    return form | {key: float(grid[i]), **fixed}, best_value
+        if best.fun < values[i]:
+            return float(np.exp(best.x)), float(best.fun)
+    return float(grid[i]), float(values[i])
 
 
-def _periodic_waveform(parts, periods, settings, length_s, block_s):
-    """The multiharmonic periodogram: at every period the deviance of a Fourier series of ``H`` harmonics, ``H`` chosen by the BIC.
+def _periodic_waveform(parts, periods, settings, length_s, block_s, deviance):
+    """The multiharmonic periodogram: the period and the number of harmonics ``H`` of least BIC.
 
-    Every ``H`` from 1 to ``periodic_harmonics`` that the period may carry
-    (:meth:`gyrocomp.sim.vocabulary.periodic._Periodic.max_harmonics`) is
-    scored ``deviance + 2 H R ln n`` (``2 H`` per-run coefficients on each of
-    the ``R`` runs, ``n`` their blocks: the selection's parameter count); the
-    harmonics summed, a pulse train's fundamental scores its whole power,
-    not the fundamental's share (Schwarzenberg-Czerny 1996).
+    For every ``H`` from 1 to ``periodic_harmonics`` the deviance of a
+    Fourier series of ``H`` harmonics is scanned over the periods that may
+    carry ``H`` (:meth:`gyrocomp.sim.vocabulary.periodic._Periodic.max_harmonics`)
+    and its best period refined (harmonic ``k`` moves ``k`` times faster
+    with the period than the fundamental, so each ``H`` is refined apart);
+    the ``H`` of least ``deviance + 2 H R ln n`` wins (``2 H`` per-run
+    coefficients on each of the ``R`` runs, ``n`` their blocks: the
+    selection's parameter count). The harmonics summed, a pulse train's
+    fundamental scores its whole power, not the fundamental's share
+    (Schwarzenberg-Czerny 1996).
 
     Returns
     -------
-    values : ndarray
-        Per period, the deviance at the best ``H`` plus that penalty (the grid's argmin is the best waveform).
-    fixed : dict
-        ``{"harmonics": H}`` of the best period, held while its period is refined.
+    params : dict
+        ``{"period_s": P, "harmonics": H}``.
+    deviance : float
+        Its ``-2 log L``.
     """
     effect = KINDS["periodic"]
     h_max = np.array([effect.max_harmonics(settings, p, length_s, block_s) for p in periods])
     log_n = np.log(sum(part.y_w.size for part in parts))
-    scores = np.full((int(h_max.max()), len(periods)), np.inf)
-    for h in range(1, scores.shape[0] + 1):
+    best_score, best = np.inf, None
+    for h in range(1, int(h_max.max()) + 1):
         ok = h_max >= h
-        scores[h - 1, ok] = _periodic_grid_deviances(parts, periods[ok], h) + 2 * h * len(parts) * log_n
-    best_h = np.argmin(scores, axis=0)
-    values = scores[best_h, np.arange(len(periods))]
-    return values, {"harmonics": int(best_h[int(np.argmin(values))]) + 1}
+        values = np.full(len(periods), np.inf)
+        values[ok] = _periodic_grid_deviances(parts, periods[ok], h)
+        period, dev = _refine(periods, values, lambda p: deviance({"period_s": p, "harmonics": h}))
+        score = dev + 2 * h * len(parts) * log_n
+        if score < best_score:
+            best_score, best = score, ({"period_s": period, "harmonics": h}, dev)
+    return best
 
 
 class _JointPart:
