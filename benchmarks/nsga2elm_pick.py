@@ -21,7 +21,10 @@ spread of the default ELM itself, which a pick that keeps it inherits.
 Seeds: ``tuning`` (0-49) were looked at while the rule was developed;
 ``check`` (1000-1049) were run once after the sign test was fixed, and
 looked at while the regime check was added (so now tuning seeds too);
-``fresh`` (2000-2049) were run once, after the regime check was fixed.
+``fresh`` (2000-2049) were run once, after the regime check was fixed,
+and read while the sign test's level was set for the family of runs
+(alpha 1 % to 0.1 %), so they too are seen now; ``fresh3000``
+(3000-3049) were run once, after that level was fixed.
 Each run of the script replaces the sets it runs in the output file when
 the settings are the same and keeps the others; the records of earlier
 rules stay under ``earlier``.
@@ -233,7 +236,7 @@ def _value(text: str):
         return text
 
 
-SEED_SETS = {"tuning": 0, "check": 1000, "fresh": 2000}
+SEED_SETS = {"tuning": 0, "check": 1000, "fresh": 2000, "fresh3000": 3000}
 """First seed of each set (module docstring: which were looked at while the rule was developed)."""
 
 
@@ -241,7 +244,10 @@ def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=50, help="seeds per problem in each set")
     parser.add_argument("--sets", default="tuning,check,fresh",
-                        help="comma-separated: tuning (seeds 0-), check (seeds 1000-), fresh (seeds 2000-)")
+                        help="comma-separated: tuning (seeds 0-), check (seeds 1000-), fresh (seeds 2000-), "
+                             "fresh3000 (seeds 3000-)")
+    parser.add_argument("--label", help="what rule and seeds this record is (kept with it when a later rule moves it "
+                                        "under `earlier`)")
     parser.add_argument("--stability", type=int, default=5, metavar="N",
                         help="refit the first N tuning seeds per problem on inputs changed by 1e-12 relative (0: skip; "
                              "fitted here unchanged first when the tuning set is not run)")
@@ -254,6 +260,8 @@ def main(argv: list[str]) -> int:
 
     settings = {**load_config(ROOT / "configs" / "models.toml")["nsga2elm"], **dict(overrides)}
     result = _previous(args.out, settings)
+    if args.label:
+        result["label"] = args.label
     result["goal"] = f"pick / default ELM (same random weights) held-out RMSE <= {GOAL} on every seed"
     result["settings"] = settings
     sets = result.setdefault("sets", {})

@@ -91,9 +91,10 @@ class NSGA2ELM(Learner):
     cv_folds : int, default=5
         K of that cross-validation; the samples are cut into ``4 * K``
         contiguous blocks, dealt to the folds in turn.
-    alpha : float, default=0.01
+    alpha : float, default=0.001
         Level of the sign test: the probability of replacing the plain ELM
-        by a candidate that is no better.
+        by a candidate that is no better (18 of 20 blocks at 0.1 %). Set
+        for a family of decisions, not one: see Notes, rule 3.
     regime_holdout : bool, default=True
         With ``accept="sign_test"``, the candidate must also have the lower
         RMSE on every thermal regime (cooling, soak, heating) present in the
@@ -188,11 +189,26 @@ class NSGA2ELM(Learner):
        exactly as ``ELM(seed=elm_seed_)``, the candidate with ``ridge``); and the
        candidate's mean squared error must be the lower one on
        significantly many blocks, a one-sided sign test at ``alpha``
-       (16 of 20 blocks at 1 %). The sign test asks nothing of the size or
-       the distribution of the block errors, only that the blocks be
-       independent, which contiguous blocks of an autocorrelated residual
-       are more nearly than samples; ``alpha`` is set low for what
-       dependence remains;
+       (18 of 20 blocks at 0.1 %: p = 211 / 2^20 = 2.0e-4; 17 blocks give
+       1.3e-3). The sign test asks nothing of the size or the distribution
+       of the block errors, only that the blocks be independent, which
+       contiguous blocks of an autocorrelated residual are more nearly
+       than samples. **Its level is set for a family of decisions.**
+       ``alpha`` bounds the chance that one fit replaces the plain ELM by
+       a candidate that is no better; the promise made of the pick
+       (issue #20) is about a family, "never worse than 1.1x" over 150
+       fits (50 seeds on each of three problems). Over N decisions the
+       chance of at least one false acceptance is at most N times the
+       test's size (Bonferroni, whatever the dependence between fits): at
+       the former 1 % (size 0.59 %, 16 blocks) that bound is 0.89 for
+       N = 150, about one false acceptance expected per family, which is
+       what the fresh seeds showed; at 0.1 % (size 0.020 %) it is 3 %.
+       Any per-fit level at or below 5 % / 150 = 3.3e-4 gives the same 18
+       blocks. The price is power: candidates that won 16 or 17 blocks,
+       most of them good, are refused and the plain ELM is kept
+       (``benchmarks/README.md``). The level was lowered after a false
+       acceptance (16 blocks, 1.24x) was seen on the fresh seeds; the
+       argument does not use that seed, and new fresh seeds checked it;
     4. and (``regime_holdout``) the candidate must also be the better one
        when each thermal regime of the training run is held out whole:
        leave-one-regime-out, regime by the sign of the smoothed
@@ -244,9 +260,9 @@ class NSGA2ELM(Learner):
     fit's extrapolation into a small regime being erratic. It is a guard,
     not a guarantee.
 
-    Held-out ratios over 100 tuning and 50 fresh seeds on three problems,
-    with and without rule 4, and the pick's stability under 1e-12 input
-    changes: ``benchmarks/results/nsga2elm_pick.json``
+    Held-out ratios over 150 seen seeds and 50 fresh ones on three
+    problems, at each level, with and without rule 4, and the pick's
+    stability under 1e-12 input changes: ``benchmarks/results/nsga2elm_pick.json``
     (``benchmarks/nsga2elm_pick.py``, ``benchmarks/README.md``).
 
     References
@@ -280,7 +296,7 @@ class NSGA2ELM(Learner):
         rmse_tolerance=0.02,
         accept="sign_test",
         cv_folds=5,
-        alpha=0.01,
+        alpha=0.001,
         regime_holdout=True,
         temperature_column=0,
         regime_window=0.01,
