@@ -48,8 +48,8 @@ class _TempRate(Effect):
     forms = ({"asymmetric": False}, {"asymmetric": True})
 
     def n_params_of(self, params):
-        """1 symmetric, 2 with heating and cooling apart (``params["asymmetric"]``, default True)."""
-        return self.n_params + bool(params.get("asymmetric", True))
+        """1 symmetric, 2 with heating and cooling apart (``params["asymmetric"]``; without it the plainer, symmetric form)."""
+        return self.n_params + bool(params.get("asymmetric", False))
 
     def bias(self, time_s, housing_c, gyro):
         t = gyro.temp_rate
@@ -58,7 +58,7 @@ class _TempRate(Effect):
 
     def columns(self, run, params, poly_degree=3, scale=None):
         rate = shapes.temperature_rate(run.time_s, run.temperature_c, smooth_s=run.rate_smooth_s)
-        if not params.get("asymmetric", True):
+        if not params.get("asymmetric", False):
             return rate[:, None], [self.name]
         return np.column_stack([rate, np.abs(rate)]), [self.name, f"{self.name}_asymmetry"]
 
