@@ -24,11 +24,22 @@ b. **innovations** -- the block-mean residual whitened under the model's
      temperature-bin indicators, whitened (a function of temperature beyond
      the model's that the noise absorbed), ``chi^2`` of their rank beyond the
      design;
-   * extreme: at the timescales the term explains (c), the largest increment
-     of the residual's ``tau`` means in units of its standard deviation under
-     the model (a step is one large increment where a random walk spreads its
-     wander over all of them), with the union bound ``n 2 Phi(-z)``, times
-     the number of taus;
+   * extreme and stationary: at the timescales the term explains (c), the
+     largest increment of the residual's ``tau`` means in units of its
+     standard deviation under the model (a step is one large increment where
+     a random walk spreads its wander over all of them), with the union bound
+     ``n 2 Phi(-z)``, times the number of taus; and whether those increments
+     keep one spread over the run (a random walk's and a flicker's increments
+     are stationary, where a transient -- a wander that starts late, a burst
+     -- puts its spread in one part): at each of those taus with at least
+     ``stationarity_segments * min_segment_increments`` increments, Bartlett's
+     test of equal variance of the standardised increments in
+     ``stationarity_segments`` consecutive parts, each part's degrees of
+     freedom the exact (Satterthwaite) ones of its sum of squares under the
+     model (:func:`bartlett`), ``chi^2`` with ``parts - 1``, times the
+     number of taus. The two make one test, ``p = 2 min(p_extreme,
+     p_stationary)``, so that the family keeps its number of tests; it is of
+     the term's own statistics when the stationarity drives it;
    * levels (flicker only): a flicker's level is Gaussian, where a noise that
      switches between a few levels (random telegraph or popcorn noise, mode
      hops) has a bimodal, light-tailed level. At the shortest ``tau`` the
@@ -83,7 +94,7 @@ from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.gap import effective_dof
 from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 
-__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "temperature_bins", "level_test"]
+__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "temperature_bins", "level_test", "bartlett"]
 
 TERMS = ("rate_random_walk", "bias_instability")
 """The noise terms a signature is checked for."""
@@ -103,6 +114,8 @@ class SignatureSettings:
     temperature_bins: int = 8
     time_bins: int = 16
     min_step_blocks: int = 4
+    stationarity_segments: int = 4
+    min_segment_increments: int = 4
 
 
 def get_config(path="unexplained") -> SignatureSettings:
@@ -191,9 +204,18 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
                     f"{p.run.name}: Allan variance at tau {point['tau_s']:.0f} s is {point['ratio']:.2f} times the "
                     f"{term} model's (p = {point['p']:.2g}): the slope it claims does not hold"
                 )
+        steady = out["extreme"]["stationary"]
         for name, what in _WHAT.items():
-            if name in out and out[name]["p"] < alpha:
+            if name in out and out[name]["p"] < alpha and not (name == "extreme" and out[name]["by"] == "stationary"):
                 reasons.append(f"{p.run.name}: {what} (p = {out[name]['p']:.2g})")
+        if out["extreme"]["p"] < alpha and out["extreme"]["by"] == "stationary":
+            own_failed = True
+            spread = ", ".join(f"{v:.2g}" for v in steady["spread"])
+            reasons.append(
+                f"{p.run.name}: the residual's {steady['tau_s']:.0f} s increments change their spread over the run "
+                f"({spread} times the {term} model's variance in {len(steady['spread'])} parts; p = {out['extreme']['p']:.2g}): "
+                "not the stationary increments of that noise"
+            )
     if agreement is not None and agreement["p"] < alpha:
         own_failed = True
         values = ", ".join(f"{v:.3g}" for v in agreement["level"])
@@ -399,46 +421,100 @@ def _allan_taus(problem, noise: NoiseModel, term, s: SignatureSettings):
 
 
 def _timescales(problem, X, cov, lower, Xw, noise, term, s):
-    """Tests (c), (b, extreme) and (b, levels) at the taus `term` explains.
+    """Tests (c), (b, extreme and stationary) and (b, levels) at the taus `term` explains.
 
-    The residual's non-overlapping AVAR against its exact moments, and the
+    The residual's non-overlapping AVAR against its exact moments; the
     largest increment of the ``tau`` means in units of its standard
     deviation under the model (union bound over the increments: valid
-    whatever their correlation).
+    whatever their correlation); and the spread of those increments in
+    consecutive parts of the run (:func:`bartlett`). Each of the last two
+    is Bonferroni over the taus tried, and they make one test, ``2 min``
+    of the two.
     """
     ms = _allan_taus(problem, noise, term, s)
+    quiet = {"stat": 0.0, "p": 1.0, "by": "extreme", "stationary": None}
     if not ms.size:
-        return [], {"stat": 0.0, "p": 1.0}, None
+        return [], quiet, None
     y = problem.y
     n = y.size
+    tb = problem.basis.block_s
     # r = R y with R = I - X (Xw' Xw)^-1 Xw' L^-1: the GLS residual; under the model Cov(r) = R Sigma R'.
     pinv = linalg.pinv(Xw)
     resid_maker = np.eye(n) - X @ pinv @ linalg.solve_triangular(lower, np.eye(n), lower=True, check_finite=False)
     r = resid_maker @ y
     cov_r = resid_maker @ cov @ resid_maker.T
-    allan, extreme, levels = [], {"stat": 0.0, "p": 1.0}, None
+    allan, levels, extreme, steady = [], None, {"p": 1.0}, {"p": 1.0}
+    n_steady = int(np.sum(n // ms - 1 >= s.stationarity_segments * s.min_segment_increments))
     for m in ms:
         k = n // m
         agg = np.hstack([np.kron(np.eye(k), np.full((1, m), 1.0 / m)), np.zeros((k, n - k * m))])
         if term == "bias_instability" and levels is None:
             # The shortest tau flicker explains: its Gaussian level (module docstring, levels).
-            levels = level_test(agg @ r, agg @ cov_r @ agg.T) | {"tau_s": float(m * problem.basis.block_s)}
+            levels = level_test(agg @ r, agg @ cov_r @ agg.T) | {"tau_s": float(m * tb)}
         diff = np.diff(agg, axis=0)
         form = diff / np.sqrt(2.0 * (k - 1))
         avar = float(np.sum((form @ r) ** 2))
-        var_d = np.diag(diff @ cov_r @ diff.T)
+        cov_d = diff @ cov_r @ diff.T
+        var_d = np.diag(cov_d)
         mean = float(np.sum(var_d) / (2.0 * (k - 1)))
         nu = effective_dof(form, cov_r)
         x = nu * avar / mean
         p = float(min(1.0, 2.0 * min(stats.chi2.cdf(x, nu), stats.chi2.sf(x, nu))))
-        allan.append({"tau_s": float(m * problem.basis.block_s), "ratio": avar / mean, "dof": nu, "p": p})
-        z = np.abs(diff @ r) / np.sqrt(var_d)
+        allan.append({"tau_s": float(m * tb), "ratio": avar / mean, "dof": nu, "p": p})
+        d = diff @ r
+        z = np.abs(d) / np.sqrt(var_d)
         p_max = float(min(1.0, z.size * 2.0 * stats.norm.sf(z.max())))
         if p_max * ms.size < extreme["p"]:
-            # Bonferroni over the taus tried: the smallest p times their number.
             j = int(np.argmax(z))
-            extreme = {"stat": float(z.max()), "tau_s": float(m * problem.basis.block_s), "time_s": float((j + 1) * m * problem.basis.block_s), "p": p_max * ms.size}
-    return allan, extreme, levels
+            extreme = {"stat": float(z.max()), "tau_s": float(m * tb), "time_s": float((j + 1) * m * tb), "p": p_max * ms.size}
+        if k - 1 >= s.stationarity_segments * s.min_segment_increments:
+            test = bartlett(d, cov_d, s.stationarity_segments)
+            if test["p"] * n_steady < steady["p"]:
+                steady = test | {"tau_s": float(m * tb), "p": float(min(1.0, test["p"] * n_steady))}
+    if steady["p"] < extreme["p"]:
+        by, p = "stationary", steady["p"]
+    else:
+        by, p = "extreme", extreme["p"]
+    out = {k: v for k, v in extreme.items() if k != "p"} | {
+        "p": float(min(1.0, 2.0 * p)), "by": by, "stationary": steady if "tau_s" in steady else None}
+    return allan, out, levels
+
+
+def bartlett(d, cov, n_parts):
+    """Bartlett's test that the increments `d` (covariance `cov` under the model) keep one spread over `n_parts` consecutive parts.
+
+    Each part ``j`` gives ``v_j = mean(d_i^2 / cov_ii)`` (1 in expectation
+    under the model) with Satterthwaite's degrees of freedom ``nu_j`` of
+    that quadratic form (:func:`gyrocomp.diagnose.gap.effective_dof`: the
+    increments of a random walk's means are correlated). With ``N = sum
+    nu_j`` and ``v = sum nu_j v_j / N``, Bartlett's ``M = N ln v - sum nu_j
+    ln v_j`` over ``C = 1 + (sum 1 / nu_j - 1 / N) / (3 (k - 1))`` is
+    ``chi^2_(k-1)`` when the spread is one; a scale common to all parts
+    (a level the model has wrong) cancels.
+
+    Returns
+    -------
+    dict
+        ``stat`` (``M / C``), ``spread`` (``v_j``), ``dof`` (``nu_j``), ``p``.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> steady = bartlett(rng.standard_normal(200), np.eye(200), 4)
+    >>> late = bartlett(rng.standard_normal(200) * np.repeat([1.0, 1.0, 1.0, 3.0], 50), np.eye(200), 4)
+    >>> bool(steady["p"] > 0.01), bool(late["p"] < 1e-6)
+    (True, True)
+    """
+    sd = np.sqrt(np.diag(cov))
+    parts = np.array_split(np.arange(d.size), n_parts)
+    v = np.array([np.mean((d[i] / sd[i]) ** 2) for i in parts])
+    nu = np.array([effective_dof(np.diag(1.0 / sd[i]) / np.sqrt(i.size), cov[np.ix_(i, i)]) for i in parts])
+    total = nu.sum()
+    pooled = float(nu @ v / total)
+    m = total * np.log(pooled) - float(nu @ np.log(v))
+    c = 1.0 + (np.sum(1.0 / nu) - 1.0 / total) / (3.0 * (n_parts - 1))
+    stat = float(m / c)
+    return {"stat": stat, "spread": v.tolist(), "dof": nu.tolist(), "p": float(stats.chi2.sf(stat, n_parts - 1))}
 
 
 def level_test(u, cov):

@@ -11,7 +11,11 @@ test below is then exact (or conservative) with a known false-alarm rate:
 
 * ``temperature`` -- a function of temperature beyond the model's:
   indicators of ``temperature_bins`` equal-width temperature bins; score,
-  ``chi^2_q``;
+  ``chi^2_q``; and, for a structure narrower than a bin (a dip over a few
+  degC), a scan of the single bins of ``temperature_scan_bins`` equal-width
+  binnings (bins of fewer than ``min_step_blocks`` blocks left out), each
+  bin's whitened score ``z`` ``N(0, 1)`` under the model, the union bound
+  ``n 2 Phi(-max |z|)``; the two make one test, ``p = 2 min`` of theirs;
 * ``heating_cooling`` -- a different offset or slope in temperature when
   heating and when cooling (``|dT/dt|`` above ``soak_rate_c_per_min``);
   score, ``chi^2_q``;
@@ -93,7 +97,7 @@ from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fi
 from gyrocomp.diagnose import signature
 from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins
 
-__all__ = ["UnexplainedSettings", "get_config", "verdict", "confirm", "gain_beside", "replication", "holm", "fisher_g", "variance_segments", "variance_groups"]
+__all__ = ["UnexplainedSettings", "get_config", "verdict", "confirm", "gain_beside", "replication", "steadiness", "holm", "fisher_g", "variance_segments", "variance_groups"]
 
 _DEG_H = 3600.0
 """deg/h per deg/s."""
@@ -105,6 +109,7 @@ class UnexplainedSettings:
 
     family_alpha: float = 0.01
     temperature_bins: int = 8
+    temperature_scan_bins: tuple = (8, 16, 32, 64)
     poweron_edges_s: tuple = (300.0, 900.0, 2700.0, 7200.0)
     min_step_blocks: int = 4
     noise_segments: int = 8
@@ -115,6 +120,8 @@ class UnexplainedSettings:
     line_segments: int = 4
     whiteness_lags: int = 10
     replication_alpha: float = 0.01
+    steady_segments: int = 4
+    steady_min_cycles: float = 1.0
     gap_block_s: float = 100.0
 
 
@@ -187,7 +194,11 @@ def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSett
        beside it);
     2. otherwise an effect with per-run columns (a periodic disturbance's
        phase and amplitude) that the holdout does not need at the effect's
-       fitted shape (:func:`replication`, p above ``replication_alpha``);
+       fitted shape (:func:`replication`, p above ``replication_alpha``), or
+       whose per-run columns differ between parts of the runs (:func:`steadiness`,
+       p below ``replication_alpha``): an interference keeps its amplitude
+       and phase, where a sinusoid fitted to a transient or to a wander
+       that comes late does not;
     3. otherwise the effect that, beside the deterministic structures the
        tests found on the fit run (a step, a spectral line, temperature
        bins, windows after power-on, segments of time, a heating/cooling
@@ -240,6 +251,9 @@ def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSett
         held = next((p for label, p in runs if label == "holdout"), None)
         lost = {e: replication(held, model, e) for e in chosen if KINDS[e].per_run and held is not None}
         lost = {e: p for e, p in lost.items() if p > s.replication_alpha}
+        unsteady = {e: steadiness([p for _, p in runs], model, e, s.steady_segments, s.steady_min_cycles)
+                    for e in chosen if KINDS[e].per_run and e not in lost}
+        unsteady = {e: p for e, p in unsteady.items() if p < s.replication_alpha}
         fit_p = next((p for label, p in runs if label == "fit"), None)
         in_place = {t: _in_place(search, fit_p, model, t, s) for t in failing}
         # A term that gains little beside the structure found in its place stands in for it; one whose own
@@ -273,6 +287,11 @@ def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSett
             entry = {"effect": effect, "gain": None, "holdout": True, "reason":
                      f"at its fitted {', '.join(model.spec.get(effect, {}))} it is not found again on the holdout "
                      f"(p = {lost[effect]:.2g} > {s.replication_alpha:g})"}
+        elif unsteady:
+            effect = min(unsteady, key=unsteady.get)
+            entry = {"effect": effect, "gain": None, "holdout": True, "reason":
+                     f"its amplitude and phase differ between {s.steady_segments} parts of the runs "
+                     f"(p = {unsteady[effect]:.2g} < {s.replication_alpha:g}): not a steady interference"}
         else:
             fit = next((pr for pr in prepared if pr.label == "fit"), None)
             names = [k for k in (fit.kept if fit is not None else []) if not k.startswith("noise_")]
@@ -316,6 +335,41 @@ def replication(problem, model, effect):
     noise, with_it, _ = fit_noise(y, Xb[:, free], problem.basis, model.noise, terms)
     without = profile_deviance(y, Xb[:, free & ~own], problem.basis.whitener(noise))[0]
     return float(stats.chi2.sf(max(without - with_it, 0.0), int(own.sum())))
+
+
+def steadiness(problems, model, effect, segments, min_cycles):
+    """p-value that `effect`'s per-run columns keep their coefficients over each run of `problems`.
+
+    On each run the model's shared coefficients are frozen at their fit-run
+    values and the noise levels refitted; the effect's per-run columns (a
+    periodic disturbance's sines and cosines) get one set of coefficients in
+    each of `segments` consecutive parts of the run instead of one for the
+    run (fewer parts where a part would hold less than `min_cycles` of the
+    effect's ``period_s``; none below two). The likelihood-ratio statistics
+    of the runs are independent and add: ``chi^2`` with the columns gained,
+    when the effect keeps one amplitude and phase (Wilks).
+    """
+    stat, dof = 0.0, 0
+    for problem in problems:
+        Xb, names = problem.design_blocks(model.spec)
+        if names != model.names:
+            raise ValueError(f"design {names} differs from the model's {model.names}")
+        n = problem.y.size
+        period = model.spec.get(effect, {}).get("period_s")
+        k = segments if period is None else min(segments, int(n * problem.basis.block_s // (min_cycles * period)))
+        if k < 2:
+            continue
+        free = np.array([c in PER_RUN for c in names])
+        own = np.array([c in KINDS[effect].per_run for c in names])
+        y = problem.y - Xb[:, ~free] @ model.beta[~free]
+        part = np.arange(n) * k // n
+        split = np.hstack([Xb[:, free & ~own]] + [Xb[:, own] * (part == j)[:, None] for j in range(k)])
+        terms = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
+        noise, with_parts, _ = fit_noise(y, split, problem.basis, model.noise, terms)
+        whole = profile_deviance(y, Xb[:, free], problem.basis.whitener(noise))[0]
+        stat += max(whole - with_parts, 0.0)
+        dof += np.linalg.matrix_rank(split) - np.linalg.matrix_rank(Xb[:, free])
+    return float(stats.chi2.sf(stat, dof)) if dof > 0 else 1.0
 
 
 def _in_place(search, problem, model, term, s: UnexplainedSettings):
@@ -502,6 +556,7 @@ class _Prepared:
             temp = block_means(run.temperature_c, run.n_per_block)[:n]
             self.temp = temp
             self.columns["temperature"] = temperature_bins(temp, s.temperature_bins)
+            self.bands, self.band_c = _bands(temp, s.temperature_scan_bins, s.min_step_blocks)
             rate = np.gradient(temp, self.block_s) * 60.0
             heating, cooling = rate > s.soak_rate_c_per_min, rate < -s.soak_rate_c_per_min
             z = (temp - temp.mean()) / max(np.ptp(temp) / 2.0, 1e-9)
@@ -565,6 +620,8 @@ class _Prepared:
         for name, G in self.columns.items():
             stat, dof, p, *_ = score_test(e, Xw, self._whiten(G))
             out[name] = {"stat": stat, "dof": dof, "p": p, "log10_p": _log10(stats.chi2.logsf(stat, dof)) if dof else 0.0}
+        if "temperature" in out and self.bands.shape[1]:
+            out["temperature"] = self._band_scan(e, Xw, out["temperature"])
         step = step_scan(e, Xw, self.lower, self.settings.min_step_blocks)
         n_pos = max(e.size - 2 * self.settings.min_step_blocks + 1, 1)
         step["log10_p"] = min(0.0, _log10(np.log(2.0 * n_pos) + stats.norm.logsf(step["stat"])))
@@ -580,6 +637,26 @@ class _Prepared:
         }
         out["moving_line"] = self._moving_line(e)
         return out
+
+    def _band_scan(self, e, Xw, bins):
+        """The temperature test (module docstring): the bins' score `bins` and the scan of narrow bands, ``2 min`` of the two."""
+        qx, _ = linalg.qr(Xw, mode="economic")
+        g = self._whiten(self.bands)
+        g = g - qx @ (qx.T @ g)
+        norm = np.linalg.norm(g, axis=0)
+        z = np.where(norm > 1e-9 * norm.max(), (g.T @ e) / np.maximum(norm, 1e-300), 0.0)
+        j = int(np.argmax(np.abs(z)))
+        n_bands = int(np.sum(norm > 1e-9 * norm.max()))
+        log_scan = np.log(2.0 * n_bands) + stats.norm.logsf(abs(z[j]))
+        scan_p = float(min(1.0, np.exp(log_scan)))
+        by = "band" if scan_p < bins["p"] else "bins"
+        log_p = min(0.0, np.log(2.0) + (log_scan if by == "band" else stats.chi2.logsf(bins["stat"], bins["dof"])))
+        return bins | {
+            "p": float(min(1.0, 2.0 * min(scan_p, bins["p"]))),
+            "log10_p": _log10(log_p),
+            "by": by,
+            "band": {"stat": float(abs(z[j])), "column": j, "temperature_c": self.band_c[j], "p": scan_p},
+        }
 
     def _moving_line(self, e):
         """Fisher's ``g`` in each of ``line_segments`` segments of `e`; Bonferroni over them."""
@@ -639,11 +716,15 @@ class _Prepared:
             return t["stat"] * float(e @ e) * 2.0 - 3.0 * np.log(n)
         if name == "moving_line":
             return float(np.sum(2.0 * np.asarray(t["power"]) - 3.0 * np.log(n)))
+        if t.get("by") == "band":
+            return t["band"]["stat"] ** 2 - np.log(n)
         return t["stat"] - t["dof"] * np.log(n)
 
     def structure(self, names):
         """Block-level columns of the deterministic structures `names` (a step its indicator, a line sin / cos)."""
         cols = [self.columns[n] for n in names if n in self.columns]
+        if "temperature" in names and self.tests["temperature"].get("by") == "band":
+            cols.append(self.bands[:, [self.tests["temperature"]["band"]["column"]]])
         if "step" in names:
             cols.append((np.arange(self.t.size) >= self.tests["step"]["block"]).astype(float)[:, None])
         if "spectral_line" in names:
@@ -705,8 +786,12 @@ class _Prepared:
             k = self._strongest(self.columns[name])
             mean_in = float(f_dh[self.columns[name][:, k] > 0].mean())
         if name == "temperature":
-            inside = self.temp[self.columns[name][:, k] > 0]
-            lo, hi = float(inside.min()), float(inside.max())
+            if result.get("by") == "band":
+                lo, hi = result["band"]["temperature_c"]
+                mean_in = float(f_dh[self.bands[:, result["band"]["column"]] > 0].mean())
+            else:
+                inside = self.temp[self.columns[name][:, k] > 0]
+                lo, hi = float(inside.min()), float(inside.max())
             return (
                 {"temperature_c": [lo, hi]},
                 f"the residual depends on temperature beyond the model (rms {amp:.3g} deg/h), most between "
@@ -777,6 +862,18 @@ class _Prepared:
             share = float(np.var(f100[:k], ddof=1)) / excess if excess > 0 else 1.0
             out["share_of_gap"] = float(min(1.0, max(0.0, share)))
         return out
+
+
+def _bands(temp, binnings, min_blocks):
+    """Indicators of the bins of each equal-width binning of `temp` in `binnings` holding at least `min_blocks` blocks, and their ranges [degC]."""
+    cols, ranges = [], []
+    for n_bins in binnings:
+        for col in temperature_bins(temp, n_bins).T:
+            if col.sum() >= min_blocks:
+                inside = temp[col > 0]
+                cols.append(col)
+                ranges.append([float(inside.min()), float(inside.max())])
+    return (np.column_stack(cols) if cols else np.empty((temp.size, 0))), ranges
 
 
 def _indicators(t, edges):

@@ -38,6 +38,9 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0, bias=0.0, hours=8.0, fs=1.0)
         x += amp * np.exp(-0.5 * ((temp - 45.0) / 3.0) ** 2)
     elif kind == "ramp":
         x += amp * t / t[-1]
+    elif kind == "transient":
+        # a one-off bump in time, 0.02 of the run wide: a random walk takes it as a burst of wander
+        x += amp * np.exp(-0.5 * ((t - 0.7 * t[-1]) / (0.02 * t[-1])) ** 2)
     elif kind == "telegraph":
         # random telegraph levels +-amp/2, exponential dwell of 500 s mean (popcorn noise)
         switches = np.cumsum(rng.exponential(500.0, size=int(4 * t[-1] / 500.0) + 16))
@@ -90,6 +93,38 @@ def test_slow_deterministic_residual_is_refused(kind, amp, words):
     result = _check("rate_random_walk", kind, amp, seed=10)
     assert not result.ok
     assert any(words in r for r in result.reasons), result.reasons
+
+
+def test_one_off_transient_is_refused_as_not_stationary():
+    # 14 deg/h for about 10 min at 70 % of each run: no step, trend or temperature test sees it (they pass
+    # with the stationarity test switched off), but the increments at the taus the walk explains carry
+    # their spread in one part of the run
+    runs = _problems(_recording(10, "transient", 0.004), _recording(1010, "transient", 0.004))
+    model = extend(runs[0], fit_baseline(runs[0]), "rate_random_walk")
+    off = sg.SignatureSettings(min_segment_increments=10**6)
+    assert sg.check("rate_random_walk", runs, model, off).ok
+    result = sg.check("rate_random_walk", runs, model)
+    assert not result.ok and not result.own_ok
+    assert any("change their spread" in r for r in result.reasons), result.reasons
+    assert all(out["extreme"]["by"] == "stationary" for out in result.stats["runs"])
+
+
+def test_bartlett_is_calibrated_on_random_walk_increments():
+    # increments of 8-block means of white noise + a random walk (neighbours correlated -0.16): the
+    # Satterthwaite degrees of freedom keep the test at its level; a standard deviation doubled in the last part is found
+    rng = np.random.default_rng(5)
+    n, m = 720, 8
+    i = np.arange(n)
+    cov = 0.5 * np.eye(n) + 0.02 * np.minimum.outer(i, i) + 0.02
+    diff = np.diff(np.kron(np.eye(n // m), np.full((1, m), 1.0 / m)), axis=0)
+    cov_d = diff @ cov @ diff.T
+    lower = np.linalg.cholesky(cov_d)
+    draws = lower @ rng.standard_normal((n // m - 1, 2000))
+    p = np.array([sg.bartlett(d, cov_d, 4)["p"] for d in draws.T])
+    for level in (0.05, 0.01):
+        assert abs(np.mean(p < level) - level) < 3.0 * np.sqrt(level * (1.0 - level) / p.size) + 0.005
+    late = draws * np.where(np.arange(n // m - 1) >= 67, 2.0, 1.0)[:, None]
+    assert np.mean([sg.bartlett(d, cov_d, 4)["p"] < 0.01 for d in late.T[:200]]) > 0.7  # 0.81 measured
 
 
 def test_runs_that_disagree_on_the_level_are_refused():

@@ -38,6 +38,7 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0):
     rate = np.gradient(temp)
     shapes = {
         "temperature": lambda: np.exp(-0.5 * ((temp - 42.0) / 2.0) ** 2),
+        "temperature_dip": lambda: -np.exp(-0.5 * ((temp - 42.0) / 1.0) ** 2),
         "heating_cooling": lambda: np.sign(rate) * (temp - 20.0) / 30.0,
         "power_on": lambda: np.exp(-t / 240.0) * (t < 900.0),
         "time": lambda: np.sin(np.pi * t / t[-1]) * np.sin(2.0 * np.pi * t / t[-1]),
@@ -110,6 +111,33 @@ def test_structure_is_flagged_and_located(kind, amp, named, check):
     if not kind.startswith("noise_"):
         assert v["size"]["fit"]["rms_deg_h"] > 0.0
         assert 0.0 < v["size"]["fit"]["share_of_gap"] <= 1.0
+
+
+def test_a_narrow_temperature_dip_is_found_by_the_band_scan():
+    # a dip of 14 deg/h, 1 degC (sigma) wide at 42 degC, crossed only on the ramps: the 8-bin test alone gives
+    # p = 2e-3 on seed 4's fit run (above its Holm share), a bin of the 32- or 64-bin scan p < 1e-5
+    t, x, temp = _recording(4, "temperature_dip", 0.004)
+    problem = Problem(Run("fit", t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), TemperatureScale.of(temp), 3)
+    model = fit_baseline(problem)
+    bins_only = ux._Prepared("fit", problem, model, ux.UnexplainedSettings(temperature_scan_bins=())).tests["temperature"]
+    scanned = ux._Prepared("fit", problem, model, ux.UnexplainedSettings()).tests["temperature"]
+    assert 1e-3 < bins_only["p"] < 1e-2
+    assert scanned["by"] == "band" and scanned["p"] < 1e-5
+    lo, hi = scanned["band"]["temperature_c"]
+    assert 40.0 < lo < 42.0 < hi < 44.0
+    v = _verdict("temperature_dip", 0.004, seed=4)
+    found = [w for w in v["where"] if w["test"] == "temperature"]
+    assert found and all(40.0 < w["temperature_c"][0] < 42.0 < w["temperature_c"][1] < 44.0 for w in found), v["where"]
+
+
+def test_temperature_scan_false_alarm_rate():
+    # clean recordings: the temperature test (bins and scan, 2 min p) is below 0.05 in about 5 % of runs or fewer
+    p = []
+    for seed in range(100, 140):
+        t, x, temp = _recording(seed)
+        problem = Problem(Run("fit", t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), TemperatureScale.of(temp), 3)
+        p.append(ux._Prepared("fit", problem, fit_baseline(problem), ux.UnexplainedSettings()).tests["temperature"]["p"])
+    assert np.mean(np.array(p) < 0.05) <= 0.05 + 3.0 * np.sqrt(0.05 * 0.95 / len(p)), sorted(p)[:5]
 
 
 def test_step_size_is_measured():
@@ -297,13 +325,16 @@ def test_an_explained_recording_is_left_alone():
     assert not v["present"] and v["unlisted"] == []
 
 
-def _periodic_pair(seed, on_holdout):
-    """A 900 s sinusoid of 1.8 deg/h on the fit run, and on the holdout only when `on_holdout`; periodic fitted on the fit run."""
+def _periodic_pair(seed, on_holdout, start=0.0, amp=0.0005):
+    """A 900 s sinusoid of `amp` (1.8 deg/h) on the fit run, and on the holdout only when `on_holdout`; periodic fitted on the fit run.
+
+    With `start`, the sinusoid begins at that fraction of each run (a transient, not an interference).
+    """
     scale, problems = None, []
-    for k, amp in ((seed, 0.0005), (seed + 500, 0.0005 if on_holdout else 0.0)):
+    for k, a in ((seed, amp), (seed + 500, amp if on_holdout else 0.0)):
         t, x, temp = _recording(k)
         scale = scale or TemperatureScale.of(temp)
-        x = x + amp * np.sin(2.0 * np.pi * t / 900.0 + k)
+        x = x + a * np.sin(2.0 * np.pi * t / 900.0 + k) * (t >= start * t[-1])
         problems.append(Problem(Run(str(k), t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), scale, 3))
     return problems, extend(problems[0], fit_baseline(problems[0]), "periodic")
 
@@ -320,3 +351,20 @@ def test_replication_false_alarm_rate():
     # absent on the holdout, the statistic is chi2_2: p uniform, below 0.05 in about 5 % of pairs
     p = [ux.replication(_periodic_pair(s, False)[0][1], _periodic_pair(s, False)[1], "periodic") for s in range(30, 50)]
     assert stats.kstest(p, "uniform").pvalue > 0.001
+
+
+def test_steadiness_passes_a_steady_periodic_and_refuses_a_late_one():
+    problems, model = _periodic_pair(9, True)
+    assert ux.steadiness(problems, model, "periodic", 4, 1.0) > 0.01
+    # the same sinusoid at twice the amplitude, from 60 % of each run on: a periodic still fits the fit run
+    problems, model = _periodic_pair(9, True, start=0.6, amp=0.001)
+    assert model.spec["periodic"]["period_s"] == pytest.approx(900.0, rel=0.15)  # 3 cycles: 980 s
+    assert ux.steadiness(problems, model, "periodic", 4, 1.0) < 1e-4
+    # a part shorter than one period is not cut: at a 900 s period the 2 h runs take at most 8 parts
+    assert ux.steadiness(problems, model, "periodic", 4, 2.0 * 3600.0 / 900.0 + 0.1) == 1.0
+
+
+def test_steadiness_false_alarm_rate():
+    # a steady sinusoid on both runs: the statistic is chi2 with 2 x 3 x 2 = 12 degrees of freedom, p uniform
+    p = [ux.steadiness(*_periodic_pair(s, True), "periodic", 4, 1.0) for s in range(60, 72)]
+    assert stats.kstest(p, "uniform").pvalue > 0.001 and min(p) > 0.001, p
