@@ -142,8 +142,7 @@ def test_a_play_hysteresis_is_one_hysteresis_not_a_random_walk():
 
     Fitted as a relay, the play leaves its ramps between the branches, slow
     structure a random walk absorbed better than the relay explained it
-    (the independent benchmark's seed 1002 #8: relay -694 BIC, random walk
-    -722, play -789).
+    (the benchmark history is in benchmarks/results/diagnose-ledger.md).
     """
     t, temperature, measured, _, rng = _oven(6)
     amplitude = 0.01
