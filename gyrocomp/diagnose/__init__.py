@@ -90,6 +90,7 @@ class DiagnoseSettings:
     temp_rate_smooth_s: float = 60.0
     thermal_lag_tau_s: tuple = (2.0, 28800.0)
     warmup_tau_s: tuple = (60.0, 14400.0)
+    rate_ramp_power: tuple = (0.25, 4.0)
     tau_grid_points: int = 24
     hysteresis_deadband_c: tuple = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
     periodic_min_blocks: float = 4.0

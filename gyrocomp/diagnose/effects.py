@@ -14,7 +14,7 @@ thermal_lag     the polynomial in the element temperature    ``tau_s`` (grid)   
 temp_rate       dT/dt [and |dT/dt|: heat, cool apart]     form (lowest BIC)       proportional to dT/dt, zero in a soak
 hysteresis      heating/cooling branch (+1/-1), power-on    ``deadband_c`` (grid)   offset by last direction, kept through a soak
 warmup          exp(-(t - t0) / tau)                        ``tau_s`` (grid)        one decay from power-on
-rate_ramp       t - t0                                      --                      straight line in time
+rate_ramp       ((t - t0) / 1 h)^p, p = 1 the line          form; ``power`` (grid)  a drift in time, straight or bent
 periodic        sin, cos (2 pi k t / P), k = 1..H           ``period_s`` (grid), H  fixed period, unrelated to T
 ==============  ==========================================  ======================  ==========
 

@@ -461,7 +461,7 @@ def _best_in_form(problem: Problem, parts, effect: str, form: dict):
     def deviance(params):
         return float(_joint_deviance(parts, params, effect).sum())
 
-    if not key:
+    if not key or key in form:
         return form, deviance(form)
     run = problem.run
     length_s = run.n_blocks * run.block_s

@@ -30,7 +30,8 @@ hysteresis          ``deadband_c``      ``hysteresis_deadband_c``  yes
                     (form: relay or
                     play)
 warmup              ``tau_s``           ``warmup_tau_s``           no
-rate_ramp           --                  --                         no
+rate_ramp           ``power`` (form:    ``rate_ramp_power``        no
+                    line or power law)
 periodic            ``period_s``, H     ``periodic_*`` (Fourier)   no
 bias_instability    (noise term)        --                         no
 rate_random_walk    (noise term)        --                         no
