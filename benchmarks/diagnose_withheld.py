@@ -211,12 +211,16 @@ class _Detector:
         )
 
     def spec(self, without=None):
-        """The deterministic effects' nonlinear parameters, as :func:`gyrocomp.diagnose.effects.design` takes them."""
+        """The deterministic effects' nonlinear parameters, as :func:`gyrocomp.diagnose.effects.design` takes them.
+
+        A parameter the simulator does not draw (``rate_ramp``'s exponent: it draws the line) is left to the
+        effect's plainest form, which its columns default to.
+        """
         from gyrocomp.diagnose.effects import DETERMINISTIC
         from gyrocomp.sim.vocabulary import KINDS
 
         return {
-            e: ({KINDS[e].nonlinear: p[KINDS[e].nonlinear]} if KINDS[e].nonlinear else {})
+            e: ({KINDS[e].nonlinear: p[KINDS[e].nonlinear]} if KINDS[e].nonlinear in p else {})
             for e, p in self.case["effects"].items()
             if e in DETERMINISTIC and e != without
         }
