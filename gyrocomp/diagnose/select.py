@@ -37,11 +37,14 @@ noise term at the boundary of its range the null distribution is half a
 
 Adding a deterministic effect refits the nonlinear parameters of those
 already in (a warm-up fitted alone stretches its time constant over a
-ramp). Look-alikes are told apart by the likelihood of their shapes, not by
-a rule: thermal lag must reproduce the decaying transient after every step,
-temperature-rate sensitivity the square pulses of dT/dt that vanish in a
-soak, hysteresis an offset that holds through a soak; a rate ramp is a line
-in time while a random walk only widens the covariance.
+ramp), and an accepted model is settled at its own noise before the next
+step (:meth:`Search.settle`), so that a later step is not credited with
+the refit of an earlier effect's parameters. Look-alikes are told apart by
+the likelihood of their shapes, not by a rule: thermal lag must reproduce
+the decaying transient after every step, temperature-rate sensitivity the
+square pulses of dT/dt that vanish in a soak, hysteresis an offset that
+holds through a soak; a rate ramp is a line in time while a random walk
+only widens the covariance.
 
 References
 ----------
@@ -291,9 +294,34 @@ class Search:
         self.steps.append({"move": "forward", "delta": delta, "accepted": accepted, "dropped": []})
         if accepted is None:
             return False
-        self.model = trials[accepted]
+        self.model = self.settle(trials[accepted])
         self.backward(accepted)
         return True
+
+    def settle(self, model: Fitted) -> Fitted:
+        """`model` with its nonlinear parameters refitted at its own noise, while that lowers the score.
+
+        An effect's nonlinear parameters are searched at the noise of the
+        model it joins, which still holds the effect's own signal as noise:
+        a sawtooth searched at the baseline's white level keeps 4 harmonics
+        where its fitted noise supports 8. Left so, the next forward step
+        credits whichever effect it tries with the refit that
+        :func:`extend` gives the earlier effects, and a spurious effect
+        earns its place. Each pass refits every nonlinear parameter in turn
+        (coordinate descent at the current noise, then the noise refitted);
+        it stops when a pass no longer lowers the score, after at most one
+        pass per effect with nonlinear parameters.
+        """
+        for _ in range(len(model.spec)):
+            spec = dict(model.spec)
+            for effect in spec:
+                if KINDS[effect].nonlinear or KINDS[effect].forms:
+                    spec[effect] = _best_nonlinear(self.fit, dataclasses.replace(model, spec=spec), effect)
+            trial = _refit(self.fit, self.baseline, model.order, spec, model.noise)
+            if self.score(trial) >= self.score(model):
+                break
+            model = trial
+        return model
 
     def backward(self, added: str | None = None) -> list:
         """Drop, one at a time, the effects (other than `added` and the start model's) that no longer earn their place."""

@@ -187,3 +187,20 @@ def test_a_straight_drift_keeps_the_line():
     assert model.order == ("rate_ramp",)
     assert model.spec["rate_ramp"] == {"form": "linear", "power": 1.0}
     assert dict(zip(model.names, model.beta))["rate_ramp"] == pytest.approx(0.01 / 4.0, rel=0.1)
+
+
+def test_a_sharp_sawtooth_is_periodic_alone():
+    """A 0.012 deg/s sawtooth of period 1200 s (z about 40): ``periodic`` with its harmonics, nothing beside it.
+
+    Searched at the baseline's noise, which still holds the sawtooth, the
+    waveform keeps too few harmonics; unless the selected model is settled at
+    its own noise (:meth:`Search.settle`), the next step credits a spurious
+    effect with the refit of the periodic's harmonics.
+    """
+    t, temperature, measured, rate_c, rng = _oven(15)
+    rate = _baseline(temperature, rng) + 0.012 * ((t / 1200.0) % 1.0 - 0.5)
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert model.order == ("periodic",)
+    assert model.spec["periodic"]["period_s"] == pytest.approx(1200.0, rel=0.01)
+    assert model.spec["periodic"]["harmonics"] >= 6
