@@ -136,11 +136,8 @@ def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
         spec[effect] = _best_nonlinear(problem, current, effect)
         # The earlier effects' nonlinear parameters were fitted without this
         # one (a warm-up fitted alone stretches its tau over a ramp): refit
-        # each with the new effect in (one coordinate-descent pass).
-        for other in current.spec:
-            if KINDS[other].nonlinear or KINDS[other].forms:
-                trial = dataclasses.replace(current, spec=spec)
-                spec[other] = _best_nonlinear(problem, trial, other)
+        # each with the new effect in.
+        spec = _descend(problem, current, spec, current.spec)
     else:
         stochastic.append(effect)
     Xb, names = problem.design_blocks(spec)
@@ -148,6 +145,16 @@ def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
     order = current.order + (effect,)
     k = current.n_params + _n_params(order, spec) - _n_params(current.order, current.spec)
     return Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
+
+
+def _descend(problem: Problem, model: Fitted, spec: dict, effects) -> dict:
+    """One coordinate-descent pass: `spec` with each of `effects` that has a nonlinear parameter or forms
+    refitted in turn (:func:`_best_nonlinear`) at `model`'s noise, beside the others' parameters as they stand."""
+    spec = dict(spec)
+    for effect in effects:
+        if KINDS[effect].nonlinear or KINDS[effect].forms:
+            spec[effect] = _best_nonlinear(problem, dataclasses.replace(model, spec=spec), effect)
+    return spec
 
 
 def holdout_fit(problem: Problem, model: Fitted):
@@ -310,13 +317,10 @@ class Search:
         earns its place. Each pass refits every nonlinear parameter in turn
         (coordinate descent at the current noise, then the noise refitted);
         it stops when a pass no longer lowers the score, after at most one
-        pass per effect with nonlinear parameters.
+        pass per deterministic effect.
         """
         for _ in range(len(model.spec)):
-            spec = dict(model.spec)
-            for effect in spec:
-                if KINDS[effect].nonlinear or KINDS[effect].forms:
-                    spec[effect] = _best_nonlinear(self.fit, dataclasses.replace(model, spec=spec), effect)
+            spec = _descend(self.fit, model, model.spec, model.spec)
             trial = _refit(self.fit, self.baseline, model.order, spec, model.noise)
             if self.score(trial) >= self.score(model):
                 break
