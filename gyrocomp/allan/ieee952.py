@@ -37,6 +37,8 @@ import numpy as np
 __all__ = [
     "FLICKER_AVAR",
     "FLICKER_FLOOR",
+    "MARKOV_PEAK_AVAR",
+    "MARKOV_PEAK_TAU",
     "DPS_TO_DPH",
     "SQRT_S_PER_SQRT_H",
     "TERMS",
@@ -45,6 +47,7 @@ __all__ = [
     "avar_basis",
     "avar",
     "psd_two_sided",
+    "markov_avar",
     "to_datasheet",
     "from_datasheet",
 ]
@@ -54,6 +57,13 @@ FLICKER_AVAR = 2.0 * math.log(2.0) / math.pi
 
 FLICKER_FLOOR = math.sqrt(FLICKER_AVAR)
 """sigma_min / B of flicker rate noise, sqrt(2 ln 2 / pi) = 0.6643."""
+
+MARKOV_PEAK_AVAR = 0.38113865810245
+"""Largest Allan variance of exponentially correlated (Markov) rate noise per unit stationary variance
+(:func:`markov_avar`, reached at ``tau = 1.8926 T_c``): its Allan deviation peaks at ``0.6174 sigma``."""
+
+MARKOV_PEAK_TAU = 1.8926177925018735
+"""``tau / T_c`` at which the Allan variance of Markov rate noise peaks."""
 
 DPS_TO_DPH = 3600.0
 """deg/s to deg/h."""
@@ -110,6 +120,29 @@ def psd_two_sided(f_hz, arw=0.0, bias_instability=0.0, rrw=0.0) -> np.ndarray:
     """Two-sided rate spectrum [(deg/s)^2/Hz] of N, B and K at `f_hz` > 0 (library units)."""
     f = np.asarray(f_hz, dtype=float)
     return arw**2 + bias_instability**2 / (2.0 * np.pi * f) + rrw**2 / (2.0 * np.pi * f) ** 2
+
+
+def markov_avar(tau_s, correlation_s) -> np.ndarray:
+    """Allan variance of exponentially correlated (first-order Gauss-Markov) rate noise of unit variance.
+
+    ``2 (T_c / tau) [1 - (T_c / (2 tau)) (3 - 4 e^(-tau/T_c) + e^(-2 tau/T_c))]``
+    ([1]_ Table C.1, "exponentially correlated (Markov) noise", written with
+    the stationary variance ``sigma^2 = q_c^2 T_c / 2``): ``2 tau / (3 T_c)``,
+    a rate random walk's slope, for ``tau << T_c``; ``2 T_c / tau``, a white
+    noise's, for ``tau >> T_c``; :data:`MARKOV_PEAK_AVAR` at ``tau = 1.89 T_c``.
+
+    Examples
+    --------
+    >>> round(float(markov_avar(MARKOV_PEAK_TAU * 100.0, 100.0)), 6) == round(MARKOV_PEAK_AVAR, 6)
+    True
+    >>> round(float(markov_avar(1e-6, 1.0) / 1e-6), 4)  # 2 / 3 at the short end
+    0.6667
+    """
+    x = np.asarray(tau_s, dtype=float) / correlation_s
+    short = x < 1e-3
+    xs = np.where(short, 1.0, x)
+    long = 2.0 / xs * (1.0 - (-np.expm1(-xs)) * (3.0 - np.exp(-xs)) / (2.0 * xs))
+    return np.where(short, 2.0 * x / 3.0 - x * x / 2.0, long)
 
 
 def to_datasheet(term: str, value):

@@ -92,6 +92,9 @@ class DiagnoseSettings:
     warmup_tau_s: tuple = (60.0, 14400.0)
     rate_ramp_power: tuple = (0.25, 4.0)
     tau_grid_points: int = 24
+    bias_correlation_s: tuple = (20.0, 7200.0)
+    bias_correlation_points: int = 9
+    bias_correlation_max_fraction: float = 4.0
     hysteresis_deadband_c: tuple = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
     periodic_min_blocks: float = 4.0
     periodic_oversample: float = 3.0
@@ -108,7 +111,7 @@ class DiagnoseSettings:
     emd_max_sift: int = 50
 
     def __post_init__(self):
-        for name in ("block_s", "max_rate_hz", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks",
+        for name in ("block_s", "max_rate_hz", "bias_correlation_max_fraction", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks",
                      "periodic_harmonic_min_cycles", "periodic_harmonic_min_blocks", "temperature_bin_c"):
             if not getattr(self, name) > 0:
                 raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be > 0")
@@ -118,6 +121,8 @@ class DiagnoseSettings:
             raise InputError(f"diagnose.detection_power = {self.detection_power!r} must be between 0 and 1")
         if self.tau_grid_points < 2:
             raise InputError(f"diagnose.tau_grid_points = {self.tau_grid_points!r} must be at least 2 (a grid from lo to hi)")
+        if self.bias_correlation_points < 2:
+            raise InputError(f"diagnose.bias_correlation_points = {self.bias_correlation_points!r} must be at least 2 (a grid from lo to hi)")
         if self.periodic_harmonics < 1:
             raise InputError(f"diagnose.periodic_harmonics = {self.periodic_harmonics!r} must be at least 1 (the sinusoid)")
         if self.max_blocks < 16:

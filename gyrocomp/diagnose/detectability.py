@@ -133,7 +133,7 @@ def noise_ratios(problem, spec, noise: NoiseModel, term: str) -> np.ndarray:
     # Sigma_0 = a I + b C shares the eigenvectors V of C (eigenvalues c): with
     # d = diag(V' Sigma V) the divergence is sum(d / (a + b c) + ln(a + b c)) + const,
     # O(m) per trial.
-    c, v = linalg.eigh(project(basis.flicker if other[0] == "bias_instability" else basis.random_walk), check_finite=False)
+    c, v = linalg.eigh(project(basis.bias(noise.bias_correlation_s) if other[0] == "bias_instability" else basis.random_walk), check_finite=False)
     c = np.maximum(c, 0.0)
     d = np.einsum("ij,ij->j", v, true @ v)
 

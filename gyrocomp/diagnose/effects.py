@@ -20,7 +20,8 @@ periodic        sin, cos (2 pi k t / P), k = 1..H           ``period_s`` (grid),
 
 The stochastic effects (``bias_instability``, ``rate_random_walk``) are
 terms of the noise covariance (:mod:`gyrocomp.diagnose.likelihood`), not
-columns. The per-run offset, for ``periodic`` the phase (every harmonic's) and for ``hysteresis``
+columns; ``bias_instability`` is flicker or, where the BIC pays for its
+correlation time, its Markov form (:func:`gyrocomp.diagnose.select.extend`). The per-run offset, for ``periodic`` the phase (every harmonic's) and for ``hysteresis``
 the level before the first excursion beyond the deadband (the branch the part
 was left in before power-on) are re-estimated
 on every run (a power-on constant and an interference phase are not

@@ -69,7 +69,7 @@ from scipy import linalg, special, stats
 
 from gyrocomp import allan
 from gyrocomp.allan.ieee952 import FLICKER_AVAR
-from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means
+from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, markov_block_covariance
 
 __all__ = ["gap", "barnes_b1", "noise_level", "log_chi2_moment", "effective_dof"]
 
@@ -193,11 +193,7 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
     variances = []
     if n - n_fitted >= 2:
         s2 = float(np.var(means, ddof=1)) * (n - 1) / (n - n_fitted)
-        expected = (
-            noise.arw**2 / t_g
-            + barnes_b1(n, 0) * FLICKER_AVAR * noise.bias_instability**2
-            + barnes_b1(n, 1) * noise.rate_random_walk**2 * t_g / 3.0
-        )
+        expected = noise.arw**2 / t_g + _bias_spread(noise, n, t_g) + barnes_b1(n, 1) * noise.rate_random_walk**2 * t_g / 3.0
         d = float(np.log(max(s2, 1e-300) / expected))
         variances.append(_spread_log_moment(noise, n, t_g, n_fitted))
     else:
@@ -220,6 +216,21 @@ def gap(residual_dps, fs_hz, noise: NoiseModel, n_fitted=1, block_s=100.0, min_w
         "noise_level": noise_level(variances),
         "timescale": {"tau_s": tau, "adev": adev, "adev_model": model, "log_ratio": log_ratio},
     }
+
+
+def _bias_spread(noise: NoiseModel, n, t_g):
+    """``E[s^2]`` of `n` contiguous means of `t_g` seconds of the bias-instability term alone.
+
+    Flicker: Barnes' ``B1(n, 0)`` times its Allan variance. The Markov form:
+    exactly, from the means' covariance ``c(h)`` at lag ``h`` blocks,
+    ``(n c(0) - (n c(0) + 2 sum_h (n - h) c(h)) / n) / (n - 1)``.
+    """
+    if not noise.bias_correlation_s:
+        return barnes_b1(n, 0) * FLICKER_AVAR * noise.bias_instability**2
+    lag = np.arange(n, dtype=float)
+    c = noise.markov_variance * markov_block_covariance(lag, t_g, noise.bias_correlation_s)
+    total = n * c[0] + 2.0 * float(np.sum((n - lag[1:]) * c[1:]))
+    return (n * c[0] - total / n) / (n - 1)
 
 
 def _spread_log_moment(noise: NoiseModel, n, t_g, n_fitted, draws=2000, seed=0):

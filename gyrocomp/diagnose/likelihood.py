@@ -1,4 +1,4 @@
-"""Gaussian likelihood of block means under a white + flicker + random-walk bias model.
+"""Gaussian likelihood of block means under a white + flicker (or Markov) + random-walk bias model.
 
 `gyrocomp diagnose` compares models of a recording (the baseline and the
 baseline plus effects) by one likelihood, so that a deterministic effect
@@ -22,6 +22,14 @@ covariance
   Allan deviation is flat; it is scaled so that the Allan variance at
   ``T_b`` is ``(2 ln 2 / pi) B^2`` (IEEE Std 952 Annex C, REFERENCES.md
   2.2);
+* or, in its Markov form, the bias instability as one first-order
+  Gauss-Markov process of correlation time ``T_c`` (IEEE Std 952 Annex C,
+  "exponentially correlated noise"): a real part's bias often wanders with
+  one dominant correlation time inside the run, a Lorentzian spectrum that
+  1/f cannot take. Its variance is set so that the peak of its Allan
+  variance equals the flicker floor of the same ``B``, ``(2 ln 2 / pi) B^2``
+  (:data:`~gyrocomp.allan.ieee952.MARKOV_PEAK_AVAR`), so ``B`` reads the
+  same on an Allan plot in both forms;
 * rate random walk ``K`` [deg/s/sqrt(s)], the bias a Wiener process from
   power-on: ``C_k[i, j] = E[m_i m_j]`` with
   ``E[W(s) W(t)] = min(s, t)``, exactly ``c_i`` (the centre of the earlier
@@ -47,9 +55,9 @@ import numpy as np
 from scipy import linalg, optimize
 
 from gyrocomp.allan import ieee952
-from gyrocomp.allan.ieee952 import FLICKER_AVAR
+from gyrocomp.allan.ieee952 import FLICKER_AVAR, MARKOV_PEAK_AVAR, markov_avar
 
-__all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "profile_deviance", "fit_noise", "fit_noise_runs"]
+__all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "markov_block_covariance", "profile_deviance", "fit_noise", "fit_noise_runs"]
 
 
 _LN_FLOOR = -60.0
@@ -68,35 +76,66 @@ class NoiseModel:
         Flicker ``B`` [deg/s]; its Allan floor is ``0.664 B``.
     rate_random_walk : float
         ``K`` [deg/s/sqrt(s)]; Allan variance ``K^2 tau / 3``.
+    bias_correlation_s : float
+        0: the bias instability is flicker. Otherwise its Markov form: one
+        Gauss-Markov process of this correlation time ``T_c`` [s] whose
+        Allan variance peaks at the flicker floor ``(0.664 B)^2``.
     """
 
     arw: float
     bias_instability: float = 0.0
     rate_random_walk: float = 0.0
+    bias_correlation_s: float = 0.0
+
+    @property
+    def markov_variance(self) -> float:
+        """Stationary variance [(deg/s)^2] of the bias instability's Markov form (0 when flicker)."""
+        if not self.bias_correlation_s:
+            return 0.0
+        return FLICKER_AVAR * self.bias_instability**2 / MARKOV_PEAK_AVAR
+
+    def term_avar(self, term, tau_s):
+        """Allan variance [(deg/s)^2] of one noise term (``arw``, ``bias_instability``, ``rate_random_walk``) at `tau_s`."""
+        tau = np.asarray(tau_s, dtype=float)
+        if term == "arw":
+            return self.arw**2 / tau
+        if term == "rate_random_walk":
+            return self.rate_random_walk**2 * tau / 3.0
+        if term != "bias_instability":
+            raise ValueError(f"{term!r} is not a noise term")
+        if self.bias_correlation_s:
+            return self.markov_variance * markov_avar(tau, self.bias_correlation_s)
+        return FLICKER_AVAR * self.bias_instability**2 * np.ones_like(tau)
 
     def avar(self, tau_s):
         """Allan variance [(deg/s)^2] at `tau_s` (IEEE Std 952, REFERENCES.md 2.2)."""
-        tau = np.asarray(tau_s, dtype=float)
-        return self.arw**2 / tau + FLICKER_AVAR * self.bias_instability**2 + self.rate_random_walk**2 * tau / 3.0
+        return sum(self.term_avar(term, tau_s) for term in ("arw", "bias_instability", "rate_random_walk"))
 
     def psd(self, f_hz):
         """One-sided power spectral density [(deg/s)^2/Hz] at `f_hz` > 0.
 
         Twice IEEE Std 952's two-sided densities ``N^2``, ``B^2 / (2 pi f)``
-        and ``K^2 / (2 pi f)^2``.
+        (or the Markov form's ``2 sigma^2 T_c / (1 + (2 pi f T_c)^2)``) and
+        ``K^2 / (2 pi f)^2``.
         """
         f = np.asarray(f_hz, dtype=float)
-        return 2.0 * (
-            self.arw**2 + self.bias_instability**2 / (2.0 * np.pi * f) + self.rate_random_walk**2 / (2.0 * np.pi * f) ** 2
-        )
+        if self.bias_correlation_s:
+            tc = self.bias_correlation_s
+            bias = 2.0 * self.markov_variance * tc / (1.0 + (2.0 * np.pi * f * tc) ** 2)
+        else:
+            bias = self.bias_instability**2 / (2.0 * np.pi * f)
+        return 2.0 * (self.arw**2 + bias + self.rate_random_walk**2 / (2.0 * np.pi * f) ** 2)
 
     def datasheet_units(self) -> dict:
-        """The terms in the units datasheets (and :mod:`gyrocomp.sim`) quote."""
-        return {
+        """The terms in the units datasheets (and :mod:`gyrocomp.sim`) quote; ``bias_correlation_s`` in the Markov form."""
+        out = {
             "arw": {"value": ieee952.to_datasheet("arw", self.arw), "unit": ieee952.UNITS["arw"]},
             "bias_instability": {"value": ieee952.to_datasheet("bias_instability", self.bias_instability), "unit": ieee952.UNITS["bias_instability"]},
             "rate_random_walk": {"value": ieee952.to_datasheet("rrw", self.rate_random_walk), "unit": ieee952.UNITS["rrw"]},
         }
+        if self.bias_correlation_s:
+            out["bias_correlation_s"] = {"value": self.bias_correlation_s, "unit": "s"}
+        return out
 
 
 def block_means(x, n_per_block):
@@ -117,7 +156,7 @@ def block_means(x, n_per_block):
 
 
 class NoiseBasis:
-    """The unit covariance matrices ``C_w``, ``C_f``, ``C_k`` of `n_blocks` block means.
+    """The unit covariance matrices ``C_w``, ``C_f``, ``C_k`` of `n_blocks` block means (and ``C_m(T_c)``, :meth:`bias`).
 
     Parameters
     ----------
@@ -142,14 +181,30 @@ class NoiseBasis:
         earlier = np.minimum.outer(idx, idx)
         self.random_walk = centre[earlier]
         self.random_walk[idx, idx] = start + self.block_s / 3.0
-        self.flicker = _flicker_block_covariance(self.n_blocks, self.block_s, None if starts is None else centre)
+        self._lag = _block_lags(self.n_blocks, self.block_s, None if starts is None else centre)
+        self.flicker = _flicker_block_covariance(self._lag, self.block_s)
+        self._markov = {}
         self._eig = {}
 
+    def bias(self, correlation_s=0.0):
+        """Unit-``B`` covariance of the bias instability: ``C_f`` (flicker, `correlation_s` 0) or its Markov form ``C_m(T_c)``.
+
+        ``C_m`` is the block-mean covariance of one Gauss-Markov process of
+        correlation time `correlation_s` with variance
+        ``FLICKER_AVAR / MARKOV_PEAK_AVAR`` (module docstring), built once per ``T_c``.
+        """
+        if not correlation_s:
+            return self.flicker
+        if correlation_s not in self._markov:
+            unit = markov_block_covariance(self._lag, self.block_s, correlation_s)
+            self._markov[correlation_s] = unit * (FLICKER_AVAR / MARKOV_PEAK_AVAR)
+        return self._markov[correlation_s]
+
     def covariance(self, noise: NoiseModel):
-        """``Sigma = N^2 C_w + B^2 C_f + K^2 C_k``."""
+        """``Sigma = N^2 C_w + B^2 C_f + K^2 C_k`` (``C_m(T_c)`` for ``C_f`` in the Markov form)."""
         out = noise.arw**2 * self.white
         if noise.bias_instability:
-            out = out + noise.bias_instability**2 * self.flicker
+            out = out + noise.bias_instability**2 * self.bias(noise.bias_correlation_s)
         if noise.rate_random_walk:
             out = out + noise.rate_random_walk**2 * self.random_walk
         return out
@@ -162,18 +217,19 @@ class NoiseBasis:
         model costs O(k) instead of a Cholesky factorisation.
         """
         colored = [
-            (name, value)
-            for name, value in (("flicker", noise.bias_instability), ("random_walk", noise.rate_random_walk))
+            (key, value)
+            for key, value in ((("bias", noise.bias_correlation_s), noise.bias_instability), (("random_walk",), noise.rate_random_walk))
             if value
         ]
         white = noise.arw**2 / self.block_s
         if not colored:
             return _Whitener(None, np.full(self.n_blocks, white))
         if len(colored) == 1:
-            name, value = colored[0]
-            if name not in self._eig:
-                self._eig[name] = linalg.eigh(getattr(self, name), check_finite=False)
-            lam, q = self._eig[name]
+            key, value = colored[0]
+            if key not in self._eig:
+                matrix = self.random_walk if key[0] == "random_walk" else self.bias(key[1])
+                self._eig[key] = linalg.eigh(matrix, check_finite=False)
+            lam, q = self._eig[key]
             return _Whitener(q, white + value**2 * np.maximum(lam, 0.0))
         return _Whitener(linalg.cholesky(self.covariance(noise), lower=True, check_finite=False), None)
 
@@ -329,35 +385,44 @@ def _simplex(x0, step=2.0):
     return np.vstack([x0] + [x0 + step * e for e in np.eye(x0.size)])
 
 
-def _flicker_block_covariance(n_blocks, block_s, centres=None, per_decade=3):
-    """Block-mean covariance of unit-``B`` flicker, as a sum of Gauss-Markov processes.
+def _block_lags(n_blocks, block_s, centres=None):
+    """Distances between blocks in blocks, ``|i - j|`` (with block `centres` [s]: their distance over ``T_b``)."""
+    if centres is None:
+        return np.abs(np.subtract.outer(np.arange(n_blocks), np.arange(n_blocks))).astype(float)
+    return np.abs(np.subtract.outer(centres, centres)) / block_s
+
+
+def markov_block_covariance(lag, block_s, correlation_s):
+    """Block-mean covariance of a unit-variance Gauss-Markov process at block distances `lag` (:func:`_block_lags`).
+
+    A process with autocovariance ``exp(-|u| / T)`` has, with ``a = T_b / T``,
+    block-mean variance ``2 (a - 1 + e^-a) / a^2`` and covariance
+    ``(1 - e^-a)^2 e^-(h-1)a / a^2`` at a lag of ``h >= 1`` blocks.
+    """
+    a = block_s / correlation_s
+    diag = 2.0 * (a - 1.0 + np.exp(-a)) / a**2
+    off = (-np.expm1(-a)) ** 2 / a**2 * np.exp(-(np.maximum(lag, 1.0) - 1.0) * a)
+    return np.where(lag == 0, diag, off)
+
+
+def _flicker_block_covariance(lag, block_s, per_decade=3):
+    """Block-mean covariance of unit-``B`` flicker at block distances `lag`, as a sum of Gauss-Markov processes.
 
     Time constants run three per decade from ``T_b / 10`` to ``L / (2 pi)``:
     the 1/f spectrum is modelled from the recording's lowest frequency
     ``1 / L`` up (as :func:`gyrocomp.sim.noise.flicker` synthesises it), so
-    that flicker does not borrow the random walk's power below ``1 / L``.
-
-    A process with autocovariance ``exp(-|u| / T)`` has, with ``a = T_b / T``,
-    block-mean variance ``2 (a - 1 + e^-a) / a^2`` and covariance
-    ``(1 - e^-a)^2 e^-(h-1)a / a^2`` at a lag of ``h >= 1`` blocks (with
-    block `centres` [s], ``h`` is their distance over ``T_b``, and ``L`` the
-    span they cover).
+    that flicker does not borrow the random walk's power below ``1 / L``
+    (``L`` the span the blocks cover). Each process's block-mean covariance
+    is :func:`markov_block_covariance`.
     """
-    if centres is None:
-        length = n_blocks * block_s
-        lag = np.abs(np.subtract.outer(np.arange(n_blocks), np.arange(n_blocks)))
-    else:
-        length = float(centres[-1] - centres[0]) + block_s
-        lag = np.abs(np.subtract.outer(centres, centres)) / block_s
+    n_blocks = lag.shape[0]
+    length = (float(lag[0, -1]) + 1.0) * block_s
     exponents = np.arange(
         np.floor(per_decade * np.log10(block_s / 10.0)), np.ceil(per_decade * np.log10(length / (2.0 * np.pi))) + 1
     )
     cov = np.zeros((n_blocks, n_blocks))
     for tc in 10.0 ** (exponents / per_decade):
-        a = block_s / tc
-        diag = 2.0 * (a - 1.0 + np.exp(-a)) / a**2
-        off = (-np.expm1(-a)) ** 2 / a**2 * np.exp(-(np.maximum(lag, 1) - 1) * a)
-        cov += np.where(lag == 0, diag, off)
+        cov += markov_block_covariance(lag, block_s, tc)
     # Allan variance at T_b: var - cov(lag 1), averaged over the blocks.
     avar = np.mean(np.diag(cov)) - np.mean(np.diag(cov, 1)) if n_blocks > 1 else np.mean(np.diag(cov))
     return cov * (FLICKER_AVAR / avar)

@@ -129,9 +129,15 @@ def fit_baseline(problem: Problem) -> Fitted:
 
 
 def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
-    """`current` plus `effect`, its parameters fitted on the fit run."""
+    """`current` plus `effect`, its parameters fitted on the fit run.
+
+    ``bias_instability`` takes the form of lowest BIC: flicker, or its
+    Markov form at each correlation time of its grid (one parameter more;
+    :class:`~gyrocomp.diagnose.likelihood.NoiseModel`).
+    """
     stochastic = [e for e in current.order if e not in DETERMINISTIC]
     spec = dict(current.spec)
+    starts = [current.noise]
     if effect in DETERMINISTIC:
         spec[effect] = _best_nonlinear(problem, current, effect)
         # The earlier effects' nonlinear parameters were fitted without this
@@ -140,11 +146,20 @@ def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
         spec = _descend(problem, current, spec, current.spec)
     else:
         stochastic.append(effect)
+        if effect == "bias_instability":
+            run = problem.run
+            grid = KINDS[effect].grid(problem.settings, run.n_blocks * run.block_s, run.block_s)
+            starts = [dataclasses.replace(current.noise, bias_correlation_s=float(tc)) for tc in (0.0, *grid)]
     Xb, names = problem.design_blocks(spec)
-    noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, current.noise, ("arw",) + tuple(stochastic))
     order = current.order + (effect,)
-    k = current.n_params + _n_params(order, spec) - _n_params(current.order, current.spec)
-    return Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
+    best = None
+    for start in starts:
+        noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, start, ("arw",) + tuple(stochastic))
+        k = current.n_params + _n_params(order, spec, noise) - _n_params(current.order, current.spec, current.noise)
+        trial = Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
+        if best is None or trial.bic < best.bic:
+            best = trial
+    return best
 
 
 def _descend(problem: Problem, model: Fitted, spec: dict, effects) -> dict:
@@ -440,15 +455,25 @@ def _refit(problem: Problem, baseline: Fitted, order: tuple, spec: dict, noise: 
     for e in ("bias_instability", "rate_random_walk"):
         if e not in stochastic:
             values[e] = 0.0
+    if "bias_instability" not in stochastic:
+        values["bias_correlation_s"] = 0.0
     Xb, names = problem.design_blocks(spec)
     noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, NoiseModel(**values), ("arw",) + stochastic)
-    k = baseline.n_params + _n_params(order[len(baseline.order) :], spec)
+    k = baseline.n_params + _n_params(order[len(baseline.order) :], spec, noise)
     return Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
 
 
-def _n_params(effects, spec: dict) -> int:
-    """Free parameters of `effects` on one run, each in its fitted form (:meth:`~gyrocomp.sim.vocabulary.Effect.n_params_of`)."""
-    return sum(KINDS[e].n_params_of(spec.get(e, {})) for e in effects)
+def _n_params(effects, spec: dict, noise: NoiseModel) -> int:
+    """Free parameters of `effects` on one run, each in its fitted form (:meth:`~gyrocomp.sim.vocabulary.Effect.n_params_of`;
+    ``bias_instability``'s form is in `noise`)."""
+    return sum(KINDS[e].n_params_of(_form(e, spec, noise)) for e in effects)
+
+
+def _form(effect: str, spec: dict, noise: NoiseModel) -> dict:
+    """The fitted nonlinear parameters of `effect`: its `spec` entry, or for ``bias_instability`` the Markov form's correlation time."""
+    if effect == "bias_instability":
+        return {"correlation_s": noise.bias_correlation_s} if noise.bias_correlation_s else {}
+    return spec.get(effect, {})
 
 
 def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_problems=()) -> dict:

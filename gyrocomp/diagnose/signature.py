@@ -92,7 +92,7 @@ from scipy import linalg, optimize, stats
 
 from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.gap import effective_dof
-from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 
 __all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "temperature_bins", "level_test", "bartlett"]
 
@@ -416,8 +416,7 @@ def _allan_taus(problem, noise: NoiseModel, term, s: SignatureSettings):
     ms = 2 ** np.arange(int(np.log2(max(n // s.min_allan_windows, 1))) + 1)
     ms = ms[n // ms >= s.min_allan_windows]
     tau = ms * tb
-    part = (FLICKER_AVAR * noise.bias_instability**2) * np.ones_like(tau) if term == "bias_instability" else noise.rate_random_walk**2 * tau / 3.0
-    return ms[part >= s.explains_share * noise.avar(tau)]
+    return ms[noise.term_avar(term, tau) >= s.explains_share * noise.avar(tau)]
 
 
 def _timescales(problem, X, cov, lower, Xw, noise, term, s):

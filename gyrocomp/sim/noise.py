@@ -8,6 +8,7 @@ generator                parameter           unit         Allan deviation
 =======================  ==================  ===========  ====================
 :func:`white`            ARW, ``N``          deg/sqrt(h)  ``N / sqrt(tau)``
 :func:`flicker`          bias instab., ``B`` deg/h        floor ``0.664 B``
+:func:`markov`           ``B``, ``T_c``      deg/h, s     peak ``0.664 B``
 :func:`random_walk`      RRW, ``K``          deg/h/sqrt(h) ``K sqrt(tau / 3)``
 =======================  ==================  ===========  ====================
 
@@ -20,11 +21,12 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import fft as sp_fft
+from scipy import signal
 
-from gyrocomp.allan.ieee952 import DPS_TO_DPH, SQRT_S_PER_SQRT_H
+from gyrocomp.allan.ieee952 import DPS_TO_DPH, FLICKER_AVAR, MARKOV_PEAK_AVAR, SQRT_S_PER_SQRT_H
 from gyrocomp.errors import InputError
 
-__all__ = ["white", "flicker", "random_walk", "arw_to_dps_sqrt_s", "rrw_to_dps_per_sqrt_s"]
+__all__ = ["white", "flicker", "markov", "random_walk", "arw_to_dps_sqrt_s", "rrw_to_dps_per_sqrt_s"]
 
 def arw_to_dps_sqrt_s(arw):
     """Angle random walk from deg/sqrt(h) to deg/s/sqrt(Hz) (= deg/sqrt(s))."""
@@ -107,6 +109,42 @@ def flicker(n, fs_hz, bias_instability, rng):
         coefficients[-1] = coefficients[-1].real * np.sqrt(2.0)
     series = sp_fft.irfft(coefficients, m)[:n]
     return series - series.mean()
+
+
+def markov(n, fs_hz, bias_instability, correlation_s, rng):
+    """Exponentially correlated (first-order Gauss-Markov) bias of bias instability `bias_instability`.
+
+    The Markov form of the bias instability (:class:`gyrocomp.diagnose.likelihood.NoiseModel`):
+    one process of correlation time ``T_c`` whose Allan deviation peaks at
+    ``0.664 B``, the flicker floor of the same ``B`` (IEEE Std 952 Annex C:
+    stationary variance ``(2 ln 2 / pi) B^2 / MARKOV_PEAK_AVAR``). Drawn
+    exactly as the AR(1) sequence ``x_k = phi x_(k-1) + sqrt(1 - phi^2)
+    sigma e_k`` with ``phi = exp(-1 / (fs T_c))``, started stationary.
+
+    Parameters
+    ----------
+    n : int
+    fs_hz : float
+    bias_instability : float
+        ``B`` [deg/h].
+    correlation_s : float
+        ``T_c`` [s].
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        Bias wander [deg/s].
+    """
+    _check(n, fs_hz, bias_instability, "bias_instability")
+    if not correlation_s > 0.0:
+        raise ValueError(f"correlation_s must be > 0 s, got {correlation_s!r}")
+    sigma = bias_instability / DPS_TO_DPH * np.sqrt(FLICKER_AVAR / MARKOV_PEAK_AVAR)
+    phi = np.exp(-1.0 / (fs_hz * correlation_s))
+    e = rng.standard_normal(n) * (sigma * np.sqrt(-np.expm1(-2.0 / (fs_hz * correlation_s))))
+    if n:
+        e[0] = sigma * rng.standard_normal()
+    return signal.lfilter([1.0], [1.0, -phi], e)
 
 
 def random_walk(n, fs_hz, rrw, rng):

@@ -104,3 +104,57 @@ def test_periodic_grid_deviances_equal_the_direct_fits():
         direct = [select._joint_deviance(parts, {"period_s": float(p)}, "periodic").sum() for p in periods]
         assert_allclose(select._periodic_grid_deviances(parts, periods), direct, rtol=1e-10)
         assert 850.0 < periods[int(np.argmin(direct))] < 950.0
+
+
+def _ar1(n, sigma, tc, fs, rng):
+    """A stationary first-order Gauss-Markov sequence drawn here (scipy's AR(1) filter, not gyrocomp.sim)."""
+    from scipy import signal
+
+    phi = np.exp(-1.0 / (fs * tc))
+    e = rng.standard_normal(n) * sigma * np.sqrt(1.0 - phi**2)
+    x, _ = signal.lfilter([1.0], [1.0, -phi], e, zi=[phi * sigma * rng.standard_normal()])
+    return x
+
+
+def test_markov_avar_is_ieee952_exponentially_correlated_noise():
+    """The Markov form's Allan deviation matches allantools on an AR(1) drawn in the test, and peaks at 0.664 B at 1.89 T_c."""
+    allantools = pytest.importorskip("allantools")
+    rng = np.random.default_rng(5)
+    tc, fs, b = 200.0, 1.0, 1.0
+    noise = NoiseModel(arw=0.0, bias_instability=b, bias_correlation_s=tc)
+    x = _ar1(400_000, np.sqrt(noise.markov_variance), tc, fs, rng)
+    taus = np.array([10.0, 50.0, 200.0, 400.0, 1000.0])
+    t, adev, err, _ = allantools.oadev(x, rate=fs, data_type="freq", taus=taus)
+    assert_allclose(adev, np.sqrt(noise.avar(t)), rtol=0.05)
+    tau = np.geomspace(10.0, 10_000.0, 2001)
+    peak = np.argmax(noise.avar(tau))
+    assert_allclose(np.sqrt(noise.avar(tau[peak])), 0.66428, rtol=1e-4)
+    assert_allclose(tau[peak] / tc, 1.8926, rtol=0.01)
+
+
+def test_markov_basis_is_the_block_mean_covariance():
+    """C_m(T_c) scaled to B equals the sample covariance of block means of the test's AR(1) at lags 0, 1 and 5."""
+    rng = np.random.default_rng(6)
+    tc, fs, tb = 120.0, 1.0, 20
+    noise = NoiseModel(arw=0.0, bias_instability=1.0, bias_correlation_s=tc)
+    x = _ar1(2_000_000, np.sqrt(noise.markov_variance), tc, fs, rng)
+    m = block_means(x, tb)
+    cov = NoiseBasis(8, float(tb)).covariance(noise)
+    for lag in (0, 1, 5):
+        empirical = np.mean(m[lag:] * m[: m.size - lag])
+        assert_allclose(empirical, cov[0, lag], rtol=0.05, atol=0.01 * cov[0, 0])
+
+
+def test_whitener_paths_agree_with_scipy_in_the_markov_form():
+    """The eigen path of C_m and the Cholesky path with a random walk beside it give scipy's -2 log L."""
+    rng = np.random.default_rng(4)
+    basis = NoiseBasis(50, 30.0)
+    y = rng.standard_normal(50) * 0.01
+    X = np.ones((50, 1))
+    for noise in (
+        NoiseModel(arw=0.03, bias_instability=0.002, bias_correlation_s=300.0),
+        NoiseModel(arw=0.03, bias_instability=0.002, rate_random_walk=1e-4, bias_correlation_s=300.0),
+    ):
+        dev, beta = profile_deviance(y, X, basis.whitener(noise))
+        ref = -2 * stats.multivariate_normal(X @ beta, basis.covariance(noise)).logpdf(y)
+        assert_allclose(dev, ref, rtol=1e-9)

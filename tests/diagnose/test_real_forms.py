@@ -24,7 +24,7 @@ from gyrocomp.recordings import recording_from_frame
 from gyrocomp.sim.effects import first_excursion, hysteresis_play
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-from independent_gen import play_operator, relay_sum  # noqa: E402  (the independent generator's operators: no gyrocomp code)
+from independent_gen import gauss_markov, kasdin_flicker, play_operator, relay_sum  # noqa: E402  (the independent generator's operators: no gyrocomp code)
 
 SIGMA = 0.01  # white rate noise per 1 Hz sample [deg/s]
 KNOTS = [(0, 25), (1800, 25), (3000, 65), (6000, 65), (8400, 5), (11400, 5), (13200, 35), (14400, 35)]
@@ -204,3 +204,29 @@ def test_a_sharp_sawtooth_is_periodic_alone():
     assert model.order == ("periodic",)
     assert model.spec["periodic"]["period_s"] == pytest.approx(1200.0, rel=0.01)
     assert model.spec["periodic"]["harmonics"] >= 6
+
+
+@pytest.mark.parametrize("seed", [21, 22])
+def test_a_markov_bias_is_bias_instability_in_its_markov_form(seed):
+    """The independent generator's Gauss-Markov bias, 0.004 deg/s with 300 s correlation (Allan peak about 12
+    times the white line there, 48 correlation times in the run): ``bias_instability`` in its Markov form,
+    the correlation time within a factor 1.6 (the grid's step is 1.75), not a random walk, whose Allan
+    slope would keep rising past the correlation time."""
+    t, temperature, measured, rate_c, rng = _oven(seed)
+    rate = _baseline(temperature, rng) + gauss_markov(t.size, 0.004, 300.0, 1.0, rng)
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert model.order == ("bias_instability",)
+    assert 300.0 / 1.6 < model.noise.bias_correlation_s < 300.0 * 1.6
+
+
+@pytest.mark.parametrize("seed", [23, 24])
+def test_a_flicker_bias_keeps_the_flicker_form(seed):
+    """Kasdin's 1/f bias (the independent generator's) of B = 0.004 deg/s: ``bias_instability`` as flicker,
+    the Markov form's correlation time not earning its parameter."""
+    t, temperature, measured, rate_c, rng = _oven(seed)
+    rate = _baseline(temperature, rng) + kasdin_flicker(t.size, 0.004, rng)
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert model.order == ("bias_instability",)
+    assert model.noise.bias_correlation_s == 0.0

@@ -280,8 +280,8 @@ def test_a_flicker_standing_in_for_telegraph_noise_is_unlisted():
     assert "bimodal" in v["unlisted"][0]["reason"]
 
 
-def _flicker_pair(seed, noise):
-    """`confirm` of a flicker fitted on the fit run; `noise(rng, n)` [deg/s] drawn for each run and added to it."""
+def _flicker_pair(seed, noise, settings=DiagnoseSettings()):
+    """`confirm` of a bias instability fitted on the fit run; `noise(rng, n)` [deg/s] drawn for each run and added to it."""
     from gyrocomp.diagnose.select import Search
 
     scale, runs = None, []
@@ -289,7 +289,7 @@ def _flicker_pair(seed, noise):
         t, x, temp = _recording(k)
         x = x + add(np.random.default_rng(k + 7), t.size)
         scale = scale or TemperatureScale.of(temp)
-        runs.append((label, Problem(Run(label, t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), scale, 3)))
+        runs.append((label, Problem(Run(label, t, x, temp, 1.0, 10, 60.0), settings, scale, 3)))
     search = Search([runs[0][1]], [])
     return ux.confirm(search, runs, extend(runs[0][1], search.baseline, "bias_instability"))
 
@@ -305,17 +305,31 @@ def test_a_flicker_the_runs_disagree_on_is_unlisted():
     assert "disagree" in v["unlisted"][0]["reason"] and "nor beside" in v["unlisted"][0]["reason"]
 
 
-def test_a_flicker_refused_only_for_whiteness_stays():
-    # a Gauss-Markov noise (40 s, 18 deg/h) taken as flicker: the holdout's innovations are correlated, its own
-    # statistics (level, slope, Gaussian levels) are flicker's, and nothing is found in its place: it stays
+def _markov_40s(rng, n):
+    """A Gauss-Markov noise of 40 s correlation and 18 deg/h, drawn here."""
     from scipy import signal
 
     phi = np.exp(-1.0 / 40.0)
-    markov = lambda rng, n: signal.lfilter([1.0], [1.0, -phi], 0.005 * np.sqrt(1.0 - phi**2) * rng.standard_normal(n))
-    model, v = _flicker_pair(1, [markov, markov])
-    assert model.order == ("bias_instability",)
+    return signal.lfilter([1.0], [1.0, -phi], 0.005 * np.sqrt(1.0 - phi**2) * rng.standard_normal(n))
+
+
+def test_a_flicker_refused_only_for_whiteness_stays():
+    # a Gauss-Markov noise (40 s, 18 deg/h) taken as flicker (the Markov form's grid emptied): the holdout's
+    # innovations are correlated, its own statistics (level, slope, Gaussian levels) are flicker's, and nothing
+    # is found in its place: it stays
+    flicker_only = DiagnoseSettings(bias_correlation_max_fraction=1e9)
+    model, v = _flicker_pair(1, [_markov_40s, _markov_40s], flicker_only)
+    assert model.order == ("bias_instability",) and model.noise.bias_correlation_s == 0.0
     sig = v["signatures"]["bias_instability"]
     assert v["present"] and not sig["ok"] and sig["own_ok"] and v["unlisted"] == []
+
+
+def test_the_markov_form_explains_a_markov_noise():
+    # the same pair with the Markov form allowed: bias_instability with its correlation time near 40 s, and nothing unexplained
+    model, v = _flicker_pair(1, [_markov_40s, _markov_40s])
+    assert model.order == ("bias_instability",)
+    assert 20.0 <= model.noise.bias_correlation_s < 80.0
+    assert not v["present"] and v["signatures"]["bias_instability"]["ok"]
 
 
 def test_an_explained_recording_is_left_alone():

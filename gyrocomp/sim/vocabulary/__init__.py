@@ -33,7 +33,10 @@ warmup              ``tau_s``           ``warmup_tau_s``           no
 rate_ramp           ``power`` (form:    ``rate_ramp_power``        no
                     line or power law)
 periodic            ``period_s``, H     ``periodic_*`` (Fourier)   no
-bias_instability    (noise term)        --                         no
+bias_instability    (noise term)        ``bias_correlation_s``     no
+                    ``correlation_s``
+                    (form: flicker or
+                    Markov)
 rate_random_walk    (noise term)        --                         no
 ==================  ==================  =========================  ============
 """
