@@ -95,6 +95,7 @@ class DiagnoseSettings:
     bias_correlation_s: tuple = (20.0, 7200.0)
     bias_correlation_points: int = 9
     bias_correlation_max_fraction: float = 4.0
+    bias_correlation_search_blocks: int = 240
     hysteresis_deadband_c: tuple = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
     periodic_min_blocks: float = 4.0
     periodic_oversample: float = 3.0
@@ -125,6 +126,8 @@ class DiagnoseSettings:
             raise InputError(f"diagnose.bias_correlation_points = {self.bias_correlation_points!r} must be at least 2 (a grid from lo to hi)")
         if self.periodic_harmonics < 1:
             raise InputError(f"diagnose.periodic_harmonics = {self.periodic_harmonics!r} must be at least 1 (the sinusoid)")
+        if self.bias_correlation_search_blocks < 16:
+            raise InputError(f"diagnose.bias_correlation_search_blocks = {self.bias_correlation_search_blocks!r} must be at least 16")
         if self.max_blocks < 16:
             raise InputError(f"diagnose.max_blocks = {self.max_blocks!r} must be at least 16")
 

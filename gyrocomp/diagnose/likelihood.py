@@ -57,7 +57,7 @@ from scipy import linalg, optimize
 from gyrocomp.allan import ieee952
 from gyrocomp.allan.ieee952 import FLICKER_AVAR, MARKOV_PEAK_AVAR, markov_avar
 
-__all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "markov_block_covariance", "profile_deviance", "fit_noise", "fit_noise_runs"]
+__all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "markov_block_covariance", "merge_blocks", "profile_deviance", "fit_noise", "fit_noise_runs"]
 
 
 _LN_FLOOR = -60.0
@@ -232,6 +232,21 @@ class NoiseBasis:
             lam, q = self._eig[key]
             return _Whitener(q, white + value**2 * np.maximum(lam, 0.0))
         return _Whitener(linalg.cholesky(self.covariance(noise), lower=True, check_finite=False), None)
+
+
+def merge_blocks(y, X, basis: NoiseBasis, max_blocks):
+    """Block means `y` and regressors `X` merged to at most `max_blocks` blocks, with their (contiguous) basis.
+
+    A coarser likelihood for searches whose every evaluation would factorise
+    the full covariance; the tail that does not fill a merged block is dropped.
+    """
+    f = -(-y.size // max_blocks)
+    k = y.size // f
+    return (
+        y[: k * f].reshape(k, f).mean(axis=1),
+        X[: k * f].reshape(k, f, X.shape[1]).mean(axis=1),
+        NoiseBasis(k, basis.block_s * f),
+    )
 
 
 def profile_deviance(y, X, whitener):

@@ -62,7 +62,7 @@ import numpy as np
 from scipy import linalg, optimize
 
 from gyrocomp.diagnose.effects import DETERMINISTIC, KINDS, PER_RUN, STOCHASTIC, Run, TemperatureScale, design, effect_columns, periodic_block_means
-from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, merge_blocks, profile_deviance
 from gyrocomp.sim.vocabulary.periodic import harmonic_names
 
 __all__ = ["Fitted", "Problem", "Search", "fit_baseline", "extend", "holdout_fit", "residual_of", "sample_arw"]
@@ -146,20 +146,40 @@ def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
         spec = _descend(problem, current, spec, current.spec)
     else:
         stochastic.append(effect)
-        if effect == "bias_instability":
-            run = problem.run
-            grid = KINDS[effect].grid(problem.settings, run.n_blocks * run.block_s, run.block_s)
-            starts = [dataclasses.replace(current.noise, bias_correlation_s=float(tc)) for tc in (0.0, *grid)]
     Xb, names = problem.design_blocks(spec)
+    free = ("arw",) + tuple(stochastic)
+    if effect == "bias_instability":
+        starts = _bias_forms(problem, current.noise, Xb, free)
     order = current.order + (effect,)
     best = None
     for start in starts:
-        noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, start, ("arw",) + tuple(stochastic))
+        noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, start, free)
         k = current.n_params + _n_params(order, spec, noise) - _n_params(current.order, current.spec, current.noise)
         trial = Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
         if best is None or trial.bic < best.bic:
             best = trial
     return best
+
+
+def _bias_forms(problem: Problem, noise: NoiseModel, Xb, free) -> list:
+    """Noise models to fit ``bias_instability`` from: flicker, and its Markov form at each correlation time of the grid.
+
+    Beside a random walk every likelihood evaluation factorises the whole
+    covariance (:meth:`NoiseBasis.whitener`), so the correlation time is
+    chosen on the block means merged to ``bias_correlation_search_blocks``
+    (:func:`~gyrocomp.diagnose.likelihood.merge_blocks`; the Markov forms
+    have one parameter count, so their deviances rank them) and only that
+    form is fitted beside flicker on the full blocks.
+    """
+    run, s = problem.run, problem.settings
+    grid = KINDS["bias_instability"].grid(s, run.n_blocks * run.block_s, run.block_s)
+    markov = [dataclasses.replace(noise, bias_correlation_s=float(tc)) for tc in grid]
+    flicker = dataclasses.replace(noise, bias_correlation_s=0.0)
+    if not noise.rate_random_walk or not markov or problem.y.size <= s.bias_correlation_search_blocks:
+        return [flicker] + markov
+    y, X, basis = merge_blocks(problem.y, Xb, problem.basis, s.bias_correlation_search_blocks)
+    deviance = [fit_noise(y, X, basis, start, free)[1] for start in markov]
+    return [flicker, markov[int(np.argmin(deviance))]]
 
 
 def _descend(problem: Problem, model: Fitted, spec: dict, effects) -> dict:

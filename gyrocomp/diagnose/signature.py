@@ -92,7 +92,7 @@ from scipy import linalg, optimize, stats
 
 from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.gap import effective_dof
-from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+from gyrocomp.diagnose.likelihood import NoiseModel, block_means, fit_noise, merge_blocks, profile_deviance
 
 __all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "temperature_bins", "level_test", "bartlett"]
 
@@ -597,7 +597,7 @@ def _agreement(runs, designs, noise: NoiseModel, term, s: SignatureSettings):
     grid = np.log(getattr(noise, term) ** 2) + np.linspace(*s.profile_span, s.profile_points)
     curves = []
     for p, X in zip(runs, designs):
-        y, Xm, basis = _merged(p, X, s.max_blocks)
+        y, Xm, basis = merge_blocks(p.y, X, p.basis, s.max_blocks)
         curves.append(np.array([_profile_white(y, Xm, basis, noise, term, g) for g in grid]))
     curves = np.array(curves)
     lows = curves.min(axis=1)
@@ -612,18 +612,6 @@ def _agreement(runs, designs, noise: NoiseModel, term, s: SignatureSettings):
         level.append(float(np.exp(0.5 * grid[np.argmin(c)]) * scale))
         interval.append([float(np.exp(0.5 * inside.min()) * scale), float(np.exp(0.5 * inside.max()) * scale)])
     return {"stat": stat, "p": p, "level": level, "interval_95": interval, "unit": unit}
-
-
-def _merged(problem, X, max_blocks):
-    """Block means and regressors merged to at most `max_blocks` blocks, with their basis."""
-    y = problem.y
-    f = -(-y.size // max_blocks)
-    k = y.size // f
-    return (
-        y[: k * f].reshape(k, f).mean(axis=1),
-        X[: k * f].reshape(k, f, X.shape[1]).mean(axis=1),
-        NoiseBasis(k, problem.basis.block_s * f),
-    )
 
 
 def _profile_white(y, X, basis, noise: NoiseModel, term, log_var):
