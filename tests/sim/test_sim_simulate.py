@@ -191,3 +191,20 @@ def test_a_measured_profile_keeps_the_configured_arw():
     terms = allan.analyse(frame["rate"].to_numpy(), 1.0).terms
     assert terms["arw"]["value"] == pytest.approx(g.arw, rel=0.05)
     assert terms["arw"]["readoff"] == pytest.approx(g.arw, rel=0.05)
+
+
+def test_a_negative_correlation_time_is_refused():
+    with pytest.raises(InputError, match="correlation_s"):
+        sim.load_sim_config(None, overrides=["gyro.bias_instability.correlation_s=-5"])
+
+
+def test_the_markov_bias_has_the_allan_peak_of_its_b():
+    """gyro.bias_instability.correlation_s > 0 draws a Gauss-Markov bias whose Allan deviation peaks near 0.664 B at 1.89 T_c."""
+    from gyrocomp import allan
+    from gyrocomp.sim import noise as sim_noise
+
+    x = sim_noise.markov(400_000, 1.0, 36.0, 100.0, np.random.default_rng(3))
+    tau, adev, _ = allan.oadev(x, 1.0, "octave")
+    peak = np.argmax(adev)
+    assert 100.0 < tau[peak] < 400.0
+    assert adev[peak] * 3600.0 == pytest.approx(0.664 * 36.0, rel=0.08)

@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 
+from gyrocomp.errors import InputError
 from gyrocomp.sim.vocabulary._base import Effect
 from gyrocomp.sim import noise as sim_noise
 from gyrocomp.sim.profile import unit_field
@@ -22,6 +23,10 @@ class BiasInstability:
     enabled: bool = True
     b_deg_per_h: float = unit_field(10.0, "deg/h")
     correlation_s: float = unit_field(0.0, "s")
+
+    def __post_init__(self):
+        if not self.correlation_s >= 0.0:
+            raise InputError(f"gyro.bias_instability.correlation_s = {self.correlation_s!r} must be >= 0 s (0: flicker)")
 
 
 class _BiasInstability(Effect):
