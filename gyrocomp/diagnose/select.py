@@ -23,7 +23,7 @@ signature on the runs). Every move uses that one rule:
   its place;
 * **backward** drops, after each addition, an effect that no longer earns
   its place (a random walk that stood in for a warm-up before the warm-up
-  was in);
+  was in), when the model left still passes the admissibility check;
 * **swap** replaces one selected effect by one or (for a noise term, which
   can stand in for two causes) two others, when the new model scores lower
   and every effect it brings earns its place.
@@ -363,14 +363,24 @@ class Search:
         return model
 
     def backward(self, added: str | None = None) -> list:
-        """Drop, one at a time, the effects (other than `added` and the start model's) that no longer earn their place."""
+        """Drop, one at a time, the effects (other than `added` and the start model's) that no longer earn their place.
+
+        Like every move, a drop must leave a model whose noise terms pass the
+        admissibility check: a short-correlation noise term beside a warm-up
+        can take the warm-up's decay at a small loss of score, but alone it
+        does not show its own signature, and forward would never have
+        accepted it so.
+        """
         dropped = []
         changed = True
         while changed:
             changed = False
             for effect in self.model.order[len(self.baseline.order) :]:
-                if effect != added and not self.earns(self.model, effect):
-                    self.model = self.without(self.model, effect)
+                if effect == added or self.earns(self.model, effect):
+                    continue
+                reduced = self.without(self.model, effect)
+                if all(self._admissible(reduced, e) for e in reduced.order[len(self.baseline.order) :]):
+                    self.model = reduced
                     dropped.append(effect)
                     changed = True
                     break

@@ -71,6 +71,20 @@ def test_backward_drops_an_effect_that_no_longer_earns_its_place():
     assert search.model.order == ("warmup",)
 
 
+def test_backward_does_not_leave_an_inadmissible_noise_term():
+    """A warm-up that no longer earns its place beside a random walk is dropped, unless the walk alone
+    would fail its admissibility check (here: admissible only beside the warm-up); forward would never accept that model."""
+    problem = _problem(*_rate(5, walk=2e-4))
+    model = extend(problem, extend(problem, fit_baseline(problem), "warmup"), "rate_random_walk")
+    free = Search([problem], CANDIDATES)
+    free.model = model
+    assert free.backward("rate_random_walk") == ["warmup"]
+    guarded = Search([problem], CANDIDATES, admissible=lambda runs, m, effect: "warmup" in m.order)
+    guarded.model = model
+    assert guarded.backward("rate_random_walk") == []
+    assert guarded.model.order == ("warmup", "rate_random_walk")
+
+
 def test_swap_replaces_a_stand_in():
     """A noise term put in place of a ramp is swapped for the ramp, which scores lower and earns its place."""
     problem = _problem(*_rate(4, ramp=0.01))
