@@ -24,6 +24,10 @@ b. **innovations** -- the block-mean residual whitened under the model's
      temperature-bin indicators, whitened (a function of temperature beyond
      the model's that the noise absorbed), ``chi^2`` of their rank beyond the
      design;
+   * temperature step: the largest score of a step at one temperature,
+     ``1[T >= c]`` at the inner edges of ``temperature_step_bins``
+     equal-width bins (a bias discontinuity the noise absorbed), with the
+     union bound over the edges (:func:`threshold_scan`);
    * extreme and stationary: at the timescales the term explains (c), the
      largest increment of the residual's ``tau`` means in units of its
      standard deviation under the model (a step is one large increment where
@@ -94,7 +98,7 @@ from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.gap import effective_dof
 from gyrocomp.diagnose.likelihood import NoiseModel, block_means, fit_noise, merge_blocks, profile_deviance
 
-__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "temperature_bins", "level_test", "bartlett"]
+__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "column_scores", "threshold_scan", "step_scan", "temperature_bins", "temperature_edges", "level_test", "bartlett"]
 
 TERMS = ("rate_random_walk", "bias_instability")
 """The noise terms a signature is checked for."""
@@ -114,6 +118,7 @@ class SignatureSettings:
     temperature_bins: int = 8
     time_bins: int = 16
     min_step_blocks: int = 4
+    temperature_step_bins: int = 64
     stationarity_segments: int = 4
     min_segment_increments: int = 4
 
@@ -252,6 +257,7 @@ _WHAT = {
     "trend": "the innovations carry a trend in time: a deterministic drift is absorbed as noise",
     "temperature": "the innovations follow the temperature changes: a temperature effect is absorbed as noise",
     "step": "the residual holds a step that the noise absorbed",
+    "temperature_step": "the innovations step at one temperature, heating and cooling alike: a bias discontinuity in temperature is absorbed as noise",
     "extreme": "one increment of the residual is far beyond the noise's spread: a step is absorbed as noise",
 }
 
@@ -353,6 +359,10 @@ def _run_tests(problem, X, noise: NoiseModel, term, s: SignatureSettings):
         bins = temperature_bins(temp, s.temperature_bins)
         stat, dof, p, *_ = score_test(e, Xw, linalg.solve_triangular(lower, bins, lower=True, check_finite=False))
         out["temperature"] = {"stat": stat, "dof": dof, "p": p}
+        edges = temperature_edges(temp, s.temperature_step_bins, s.min_step_blocks)
+        if edges.size:
+            found = threshold_scan(e, Xw, lower, temp, edges)
+            out["temperature_step"] = {"stat": found["stat"], "temperature_c": float(edges[found["index"]]), "p": found["p"]}
     out["step"] = step_scan(e, Xw, lower, s.min_step_blocks)
     out["step"]["time_s"] = out["step"]["block"] * problem.basis.block_s
     out["allan"], out["extreme"], levels = _timescales(problem, X, cov, lower, Xw, noise, term, s)
@@ -361,15 +371,59 @@ def _run_tests(problem, X, noise: NoiseModel, term, s: SignatureSettings):
     return out
 
 
+def column_scores(e, Xw, lower, G):
+    """Whitened scores of the columns `G` against the innovations `e` of the design `Xw`.
+
+    Each column is whitened by ``L`` and made orthogonal to the design;
+    ``z_j`` is the score of its unit direction, ``N(0, 1)`` when the model
+    holds. A column inside the design (no part orthogonal to it) scores 0.
+
+    Returns
+    -------
+    z : ndarray
+    live : ndarray of bool
+        The columns with a part outside the design.
+    norm : ndarray
+        The norm of that part (``z_j / norm_j`` is the column's GLS size).
+    """
+    g = linalg.solve_triangular(lower, G, lower=True, check_finite=False)
+    qx, _ = linalg.qr(Xw, mode="economic")
+    g -= qx @ (qx.T @ g)
+    norm = np.linalg.norm(g, axis=0)
+    live = norm > 1e-9 * max(float(norm.max(initial=0.0)), 1e-300)
+    z = np.where(live, (g.T @ e) / np.maximum(norm, 1e-300), 0.0)
+    return z, live, norm
+
+
+def threshold_scan(e, Xw, lower, x, edges):
+    """The most likely step of the residual where the block-level variable `x` crosses one of `edges`, and its p-value.
+
+    The columns ``1[x >= c]``, one per edge ``c`` (time since power-on: a
+    step at one time; temperature: a step at one temperature, the same
+    heating and cooling), scored by :func:`column_scores`. The p-value of
+    ``max |z_j|`` is the union bound ``min(1, n_j 2 Phi(-max |z|))`` over the
+    ``n_j`` columns outside the design, valid whatever their correlation.
+
+    Returns
+    -------
+    dict
+        ``stat`` (max ``|z|``), ``index`` (of that edge), ``size`` (the
+        step's GLS size in the residual's unit), ``p``, ``log_p`` (natural
+        log of the bound, for p-values below floating point).
+    """
+    z, live, norm = column_scores(e, Xw, lower, (np.asarray(x)[:, None] >= np.asarray(edges)[None, :]).astype(float))
+    if not live.any():
+        return {"stat": 0.0, "index": 0, "size": 0.0, "p": 1.0, "log_p": 0.0}
+    j = int(np.argmax(np.abs(z)))
+    log_p = min(0.0, float(np.log(2.0 * live.sum()) + stats.norm.logsf(abs(z[j]))))
+    return {"stat": float(abs(z[j])), "index": j, "size": float(z[j] / norm[j]), "p": float(np.exp(log_p)), "log_p": log_p}
+
+
 def step_scan(e, Xw, lower, min_blocks=4):
     """The most likely step in the residual and its p-value, for innovations `e` of the design `Xw`.
 
-    For a step at every block ``j`` (at least `min_blocks` from either end)
-    the column ``1[i >= j]`` is whitened by ``L`` and made orthogonal to the
-    design; ``z_j`` is the score of its unit direction, ``N(0, 1)`` when the
-    model holds. The p-value of ``max |z_j|`` is the union bound
-    ``min(1, n_j 2 Phi(-max |z|))``, valid whatever the correlation of the
-    ``z_j``.
+    A step at every block ``j`` (at least `min_blocks` from either end):
+    :func:`threshold_scan` of the block index.
 
     Returns
     -------
@@ -381,15 +435,22 @@ def step_scan(e, Xw, lower, min_blocks=4):
     pos = np.arange(min_blocks, n - min_blocks + 1)
     if not pos.size:
         return {"stat": 0.0, "block": 0, "size": 0.0, "p": 1.0}
-    steps = (np.arange(n)[:, None] >= pos[None, :]).astype(float)
-    g = linalg.solve_triangular(lower, steps, lower=True, check_finite=False)
-    qx, _ = linalg.qr(Xw, mode="economic")
-    g -= qx @ (qx.T @ g)
-    norm = np.linalg.norm(g, axis=0)
-    z = (g.T @ e) / np.maximum(norm, 1e-300)
-    j = int(np.argmax(np.abs(z)))
-    p = float(min(1.0, pos.size * 2.0 * stats.norm.sf(abs(z[j]))))
-    return {"stat": float(abs(z[j])), "block": int(pos[j]), "size": float(z[j] / norm[j]), "p": p}
+    found = threshold_scan(e, Xw, lower, np.arange(n), pos)
+    return {"stat": found["stat"], "block": int(pos[found["index"]]), "size": found["size"], "p": found["p"]}
+
+
+def temperature_edges(temperature_c, n_bins, min_blocks):
+    """The inner edges of `n_bins` equal-width bins of the block temperatures with at least `min_blocks` blocks on either side [degC].
+
+    Examples
+    --------
+    >>> temperature_edges(np.array([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]), 4, 2).tolist()
+    [1.75, 3.5, 5.25]
+    """
+    t = np.asarray(temperature_c, dtype=float)
+    edges = np.linspace(t.min(), t.max(), n_bins + 1)[1:-1]
+    above = (t[:, None] >= edges[None, :]).sum(axis=0)
+    return edges[(above >= min_blocks) & (t.size - above >= min_blocks)]
 
 
 def temperature_bins(temperature_c, n_bins):

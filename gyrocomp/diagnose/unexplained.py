@@ -25,6 +25,15 @@ test below is then exact (or conservative) with a known false-alarm rate:
   segments of the run; score, ``chi^2_q``;
 * ``step`` -- a step at an unknown time
   (:func:`gyrocomp.diagnose.signature.step_scan`); union bound over times;
+* ``temperature_step`` -- a step at an unknown temperature, the same when
+  heating and when cooling (a bias discontinuity: a mode that switches at
+  one temperature, a solder or package transition): the column
+  ``1[T >= c]`` at each inner edge ``c`` of ``temperature_step_bins``
+  equal-width bins (at least ``min_step_blocks`` blocks on either side),
+  its whitened score ``z`` ``N(0, 1)`` under the model, the union bound
+  ``n 2 Phi(-max |z|)``. A run that crosses ``c`` several times shows it
+  as several steps in time, and a hysteresis (which switches with the
+  direction of the temperature change, wherever that is) takes part of it;
 * ``spectral_line`` -- a sinusoid at an unknown frequency (at least
   ``line_min_cycles`` cycles in the run): Fisher's ``g`` of the periodogram
   of ``e``, ``P = m (1 - g)^(m-1)`` [1]_;
@@ -95,7 +104,7 @@ from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.effects import KINDS, PER_RUN
 from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 from gyrocomp.diagnose import signature
-from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins
+from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins, temperature_edges
 
 __all__ = ["UnexplainedSettings", "get_config", "verdict", "confirm", "gain_beside", "replication", "steadiness", "holm", "fisher_g", "variance_segments", "variance_groups"]
 
@@ -112,6 +121,7 @@ class UnexplainedSettings:
     temperature_scan_bins: tuple = (8, 16, 32, 64)
     poweron_edges_s: tuple = (300.0, 900.0, 2700.0, 7200.0)
     min_step_blocks: int = 4
+    temperature_step_bins: int = 64
     noise_segments: int = 8
     noise_min_ratio: float = 1.25
     soak_rate_c_per_min: float = 0.05
@@ -200,14 +210,19 @@ def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSett
        and phase, where a sinusoid fitted to a transient or to a wander
        that comes late does not;
     3. otherwise the effect that, beside the deterministic structures the
-       tests found on the fit run (a step, a spectral line, temperature
-       bins, windows after power-on, segments of time, a heating/cooling
-       offset: :meth:`_Prepared.structure`), gains least: ``Delta(-2 log L)
-       - k ln n`` of removing it from the fit run's model with those
-       columns in the design (its nonlinear parameters kept, the noise
-       refitted), when that gain is at most the selection's
-       ``bic_margin``. An effect that earns its place against the
-       vocabulary but not beside a step at one time, say, described the step.
+       tests found on the fit run (a step, a step at one temperature, a
+       spectral line, temperature bins, windows after power-on, segments of
+       time, a heating/cooling offset: :meth:`_Prepared.structure`), gains
+       least: ``Delta(-2 log L) - k ln n`` of removing it from the fit
+       run's model with those columns in the design (its nonlinear
+       parameters kept, the noise refitted), when that gain is at most the
+       selection's ``bic_margin``. The structures are those kept together
+       (:meth:`_Prepared.explain`), or any one found that those make
+       redundant: the same residual described another way. An effect that
+       earns its place against the vocabulary but not beside a step at one
+       time, say, described the step; a hysteresis fitted to a bias that
+       steps at one temperature leaves one crossing as a step in time, and
+       does not earn its place beside the step in temperature.
 
     The rules only unlist, and only when the verdict is present, so a
     recording the model explains is never touched (its false-alarm rate is
@@ -297,14 +312,19 @@ def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSett
             names = [k for k in (fit.kept if fit is not None else []) if not k.startswith("noise_")]
             if not names:
                 break
-            G = fit.structure(names)
-            gains = {e: gain_beside(fit.problem, model, e, G) for e in chosen}
-            effect = min(gains, key=gains.get)
-            if gains[effect] > search.margin:
+            # The structures kept together, and each one the tests found that those make redundant on its own: the
+            # same residual described another way (a step at one temperature, of which a step in time is one crossing).
+            others = [k for k, t in fit.tests.items() if t.get("rejected") and not k.startswith("noise_") and k not in names]
+            gains = {}
+            for e in chosen:
+                gains[e] = min((gain_beside(fit.problem, model, e, fit.structure(G)), G) for G in [names] + [[k] for k in others])
+            effect = min(gains, key=lambda e: gains[e][0])
+            gain, beside = gains[effect]
+            if gain > search.margin:
                 break
-            entry = {"effect": effect, "gain": float(gains[effect]), "holdout": False, "reason":
-                     f"beside the {', '.join(n.replace('_', ' ') for n in names)} the tests found on the fit run it gains "
-                     f"{gains[effect]:.1f} in BIC (<= {search.margin:g}): it stands in for that structure"}
+            entry = {"effect": effect, "gain": float(gain), "holdout": False, "reason":
+                     f"beside the {', '.join(n.replace('_', ' ') for n in beside)} the tests found on the fit run it gains "
+                     f"{gain:.1f} in BIC (<= {search.margin:g}): it stands in for that structure"}
         unlisted.append(entry)
         model = search.without(model, effect)
     if unlisted:
@@ -557,6 +577,7 @@ class _Prepared:
             self.temp = temp
             self.columns["temperature"] = temperature_bins(temp, s.temperature_bins)
             self.bands, self.band_c = _bands(temp, s.temperature_scan_bins, s.min_step_blocks)
+            self.threshold_c = temperature_edges(temp, s.temperature_step_bins, s.min_step_blocks)
             rate = np.gradient(temp, self.block_s) * 60.0
             heating, cooling = rate > s.soak_rate_c_per_min, rate < -s.soak_rate_c_per_min
             z = (temp - temp.mean()) / max(np.ptp(temp) / 2.0, 1e-9)
@@ -627,6 +648,8 @@ class _Prepared:
         step["log10_p"] = min(0.0, _log10(np.log(2.0 * n_pos) + stats.norm.logsf(step["stat"])))
         step["time_s"] = step["block"] * self.block_s
         out["step"] = step
+        if self.problem.run.temperature_c is not None and self.threshold_c.size:
+            out["temperature_step"] = self._threshold_scan(e, Xw)
         g, p, j = fisher_g(e, self.settings.line_min_cycles)
         m = (e.size - 1) // 2 - self.settings.line_min_cycles + 1
         out["spectral_line"] = {
@@ -640,14 +663,9 @@ class _Prepared:
 
     def _band_scan(self, e, Xw, bins):
         """The temperature test (module docstring): the bins' score `bins` and the scan of narrow bands, ``2 min`` of the two."""
-        qx, _ = linalg.qr(Xw, mode="economic")
-        g = self._whiten(self.bands)
-        g = g - qx @ (qx.T @ g)
-        norm = np.linalg.norm(g, axis=0)
-        z = np.where(norm > 1e-9 * norm.max(), (g.T @ e) / np.maximum(norm, 1e-300), 0.0)
+        z, live, _ = signature.column_scores(e, Xw, self.lower, self.bands)
         j = int(np.argmax(np.abs(z)))
-        n_bands = int(np.sum(norm > 1e-9 * norm.max()))
-        log_scan = np.log(2.0 * n_bands) + stats.norm.logsf(abs(z[j]))
+        log_scan = np.log(2.0 * live.sum()) + stats.norm.logsf(abs(z[j]))
         scan_p = float(min(1.0, np.exp(log_scan)))
         by = "band" if scan_p < bins["p"] else "bins"
         log_p = min(0.0, np.log(2.0) + (log_scan if by == "band" else stats.chi2.logsf(bins["stat"], bins["dof"])))
@@ -656,6 +674,17 @@ class _Prepared:
             "log10_p": _log10(log_p),
             "by": by,
             "band": {"stat": float(abs(z[j])), "column": j, "temperature_c": self.band_c[j], "p": scan_p},
+        }
+
+    def _threshold_scan(self, e, Xw):
+        """The temperature-step test (module docstring): the edge of largest ``|z|`` and its union-bound p."""
+        found = signature.threshold_scan(e, Xw, self.lower, self.temp, self.threshold_c)
+        return {
+            "stat": found["stat"],
+            "temperature_c": float(self.threshold_c[found["index"]]),
+            "size": found["size"],
+            "p": found["p"],
+            "log10_p": _log10(found["log_p"]),
         }
 
     def _moving_line(self, e):
@@ -709,7 +738,7 @@ class _Prepared:
     def _evidence(self, name, n):
         """Score statistic minus its BIC penalty (``chi^2`` = ``z^2`` for a step; ``g`` times the total power for a line)."""
         t = self.tests[name]
-        if name == "step":
+        if name in ("step", "temperature_step"):
             return t["stat"] ** 2 - 2.0 * np.log(n)
         if name == "spectral_line":
             e = self._innovations(np.empty((n, 0)))[0]
@@ -727,6 +756,8 @@ class _Prepared:
             cols.append(self.bands[:, [self.tests["temperature"]["band"]["column"]]])
         if "step" in names:
             cols.append((np.arange(self.t.size) >= self.tests["step"]["block"]).astype(float)[:, None])
+        if "temperature_step" in names:
+            cols.append((self.temp >= self.tests["temperature_step"]["temperature_c"]).astype(float)[:, None])
         if "spectral_line" in names:
             w = 2.0 * np.pi / self.tests["spectral_line"]["period_s"]
             cols.append(np.column_stack([np.sin(w * self.t), np.cos(w * self.t)]))
@@ -820,6 +851,13 @@ class _Prepared:
                 {"time_s": [t0 - self.block_s, t0 + self.block_s]},
                 f"a step of {float(coef[-1]) * _DEG_H:+.3g} deg/h at {t0 / 3600:.2f} h",
             )
+        if name == "temperature_step":
+            c = result["temperature_c"]
+            return (
+                {"temperature_c": [c, c]},
+                f"a step of {float(coef[-1]) * _DEG_H:+.3g} deg/h at {c:.1f} degC, the same heating and cooling: "
+                "a bias discontinuity in temperature (a hysteresis switches with the direction of the change, not at one temperature)",
+            )
         if name == "moving_line":
             periods = result["period_s"]
             spans = ", ".join(
@@ -839,11 +877,7 @@ class _Prepared:
     def _strongest(self, G):
         """Index of the column of `G` whose whitened score ``|g' e| / |g|`` (orthogonal to the design) is largest."""
         e, Xw, _ = self._innovations(np.empty((self.t.size, 0)))
-        qx, _ = linalg.qr(Xw, mode="economic")
-        g = self._whiten(G)
-        g = g - qx @ (qx.T @ g)
-        z = np.abs(g.T @ e) / np.maximum(np.linalg.norm(g, axis=0), 1e-300)
-        return int(np.argmax(z))
+        return int(np.argmax(np.abs(signature.column_scores(e, Xw, self.lower, G)[0])))
 
     def size(self, baseline_residual, s: UnexplainedSettings):
         """RMS [deg/h] of the kept deterministic structures (fitted jointly) and their share of the baseline's gap."""

@@ -84,7 +84,8 @@ def test_config_matches_defaults():
 @pytest.mark.parametrize(
     ("kind", "amp", "named", "check"),
     [
-        ("temperature", 0.002, ("temperature",), lambda w: w["temperature_c"][0] - 2.5 < 42.0 < w["temperature_c"][1] + 2.5),
+        # a bump at 42 degC on a profile above 44 degC only in its 50 degC soak is as well a step near 40 degC
+        ("temperature", 0.002, ("temperature", "temperature_step"), lambda w: w["temperature_c"][0] - 2.5 < 42.0 < w["temperature_c"][1] + 2.5),
         ("heating_cooling", 0.001, ("heating_cooling",), lambda w: w["regime"] in ("heating", "cooling")),
         # a settling after power-on is as well described by an early step
         ("power_on", 0.004, ("power_on", "step"), lambda w: w["time_s"][0] < 900.0),
