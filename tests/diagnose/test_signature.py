@@ -36,6 +36,9 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0, bias=0.0, hours=8.0, fs=1.0)
         x += amp * (t > 0.37 * t[-1])
     elif kind == "bump":
         x += amp * np.exp(-0.5 * ((temp - 45.0) / 3.0) ** 2)
+    elif kind == "temperature_step":
+        # a bias discontinuity at 45 degC, crossed heating and cooling: a pulse in time
+        x += amp * (temp >= 45.0)
     elif kind == "ramp":
         x += amp * t / t[-1]
     elif kind == "transient":
@@ -87,6 +90,7 @@ def test_true_flicker_passes():
         ("step", 0.002, "step"),
         ("bump", 0.01, "Allan variance"),
         ("ramp", 0.01, "trend in time"),
+        ("temperature_step", 0.002, "one temperature"),
     ],
 )
 def test_slow_deterministic_residual_is_refused(kind, amp, words):

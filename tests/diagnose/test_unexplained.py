@@ -21,15 +21,24 @@ N = 0.005  # deg/s/sqrt(Hz)
 HOURS = 2.0
 
 
-def _recording(seed, kind="none", amp=0.0, rrw=0.0):
+def _temperature(t):
+    """The oven profile [degC] at `t` [s]: 1 degC/min ramps and soaks at 25, 50, 20 and 35 degC."""
+    return np.interp(t / 60.0, [0, 10, 35, 50, 80, 90, 105, 120], [25, 25, 50, 50, 20, 20, 35, 35])
+
+
+def _staircase(t):
+    """A staircase profile [degC] at `t` [s]: a soak at 25 degC, 1 degC/min down to 0, then up in 10 degC steps soaked 15 min."""
+    return np.interp(t / 60.0, [0, 15, 40, 50, 60, 75, 85, 100, 110, 120], [25, 25, 0, 0, 10, 10, 20, 20, 30, 30])
+
+
+def _recording(seed, kind="none", amp=0.0, rrw=0.0, profile=_temperature):
     rng = np.random.default_rng(seed)
     n = int(HOURS * 3600)
     t = np.arange(n, dtype=float)
-    temp = np.interp(t / 60.0, [0, 10, 35, 50, 80, 90, 105, 120], [25, 25, 50, 50, 20, 20, 35, 35])
     sigma = np.full(n, N)
     if kind == "noise_samples":
         sigma[n // 2 :] *= amp
-    temp = np.interp(t / 60.0, [0, 10, 35, 50, 80, 90, 105, 120], [25, 25, 50, 50, 20, 20, 35, 35])
+    temp = profile(t)
     if kind == "noise_temperature":
         sigma *= 1.0 + (amp - 1.0) * (temp - 20.0) / 30.0
     x = sigma * rng.standard_normal(n) + 0.002 * ((temp - 35.0) / 15.0) ** 3
@@ -43,6 +52,8 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0):
         "power_on": lambda: np.exp(-t / 240.0) * (t < 900.0),
         "time": lambda: np.sin(np.pi * t / t[-1]) * np.sin(2.0 * np.pi * t / t[-1]),
         "step": lambda: (t > 0.4 * t[-1]).astype(float),
+        # a bias discontinuity at 30 degC, heating and cooling alike: crossed three times, so no one step in time
+        "temperature_step": lambda: (temp >= 30.0).astype(float),
         "spectral_line": lambda: np.sin(2.0 * np.pi * t / 600.0),
         # a tone whose period grows geometrically from 200 s to 800 s over the run (a chirp)
         "moving_line": lambda: np.sin(2.0 * np.pi * t[-1] / (200.0 * np.log(4.0)) * (1.0 - 4.0 ** (-t / t[-1]))),
@@ -92,6 +103,7 @@ def test_config_matches_defaults():
         # a slow drift in time is as well described by a step in its middle
         ("time", 0.002, ("time", "step"), lambda w: w["time_s"][1] <= HOURS * 3600.0),
         ("step", 0.001, ("step",), lambda w: abs(np.mean(w["time_s"]) - 0.4 * HOURS * 3600.0) < 120.0),
+        ("temperature_step", 0.002, ("temperature_step",), lambda w: abs(w["temperature_c"][0] - 30.0) < 1.0),
         ("spectral_line", 0.0006, ("spectral_line",), lambda w: w["timescale_s"] == pytest.approx(600.0, rel=0.05)),
         # the chirp's power is spread over the whole run's Fourier frequencies: found segment by segment
         ("moving_line", 0.002, ("moving_line",), lambda w: 150.0 < w["timescale_s"][0] < w["timescale_s"][1] < 1000.0),
@@ -131,13 +143,15 @@ def test_a_narrow_temperature_dip_is_found_by_the_band_scan():
     assert found and all(40.0 < w["temperature_c"][0] < 42.0 < w["temperature_c"][1] < 44.0 for w in found), v["where"]
 
 
-def test_temperature_scan_false_alarm_rate():
-    # clean recordings: the temperature test (bins and scan, 2 min p) is below 0.05 in about 5 % of runs or fewer
+@pytest.mark.parametrize("test", ["temperature", "temperature_step"])
+def test_temperature_scan_false_alarm_rate(test):
+    # clean recordings: the temperature test (bins and scan, 2 min p) and the temperature-step scan (union
+    # bound) are each below 0.05 in about 5 % of runs or fewer
     p = []
     for seed in range(100, 140):
         t, x, temp = _recording(seed)
         problem = Problem(Run("fit", t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), TemperatureScale.of(temp), 3)
-        p.append(ux._Prepared("fit", problem, fit_baseline(problem), ux.UnexplainedSettings()).tests["temperature"]["p"])
+        p.append(ux._Prepared("fit", problem, fit_baseline(problem), ux.UnexplainedSettings()).tests[test]["p"])
     assert np.mean(np.array(p) < 0.05) <= 0.05 + 3.0 * np.sqrt(0.05 * 0.95 / len(p)), sorted(p)[:5]
 
 
@@ -219,13 +233,13 @@ def test_summary_never_calls_an_unexplained_recording_explained(selected):
     assert "the baseline explains the recording" in to_markdown(_report(False, []))
 
 
-def _confirmed(shape, seed, terms, rrw=0.0):
+def _confirmed(shape, seed, terms, rrw=0.0, profile=_temperature):
     """`confirm` on a pair of constructed runs with `shape(t)` [deg/s] added to both, starting from `terms`."""
     from gyrocomp.diagnose.select import Search
 
     scale, runs = None, []
     for label, k in (("fit", seed), ("holdout", seed + 500)):
-        t, x, temp = _recording(k, rrw=rrw)
+        t, x, temp = _recording(k, rrw=rrw, profile=profile)
         scale = scale or TemperatureScale.of(temp)
         runs.append((label, Problem(Run(label, t, x + shape(t), temp, 1.0, 10, 60.0), DiagnoseSettings(), scale, 3)))
     search = Search([runs[0][1]], [])
@@ -250,6 +264,38 @@ def test_an_effect_that_earns_its_place_beside_the_step_stays():
     model, v = _confirmed(lambda t: 0.001 * (t > 0.4 * t[-1]) + 0.003 * t / t[-1], 7, ("rate_ramp",))
     assert model.order == ("rate_ramp",)
     assert v["present"] and v["unlisted"] == []
+
+
+def test_a_hysteresis_standing_in_for_a_temperature_step_is_unlisted():
+    # 14 deg/h above 30 degC, heating and cooling alike: a relay (switching with the direction of the change)
+    # takes part of it and leaves a crossing as a step in time, the structure kept on the fit run; beside the
+    # step at one temperature, which that step makes redundant, it gains nothing
+    model, v = _confirmed(lambda t: 0.004 * (_temperature(t) >= 30.0), 8, ("hysteresis",))
+    assert model.order == ()
+    assert v["present"] and [u["effect"] for u in v["unlisted"]] == ["hysteresis"]
+    assert "temperature step" in v["unlisted"][0]["reason"]
+    assert any(w["test"] == "temperature_step" and abs(w["temperature_c"][0] - 30.0) < 1.0 for w in v["where"]), v["where"]
+
+
+def test_a_hysteresis_is_judged_beside_each_description_of_the_residual():
+    # 14 deg/h above 22 degC on the staircase, crossed cooling (25 -> 0) and heating (20 -> 30): the relay takes the
+    # first crossing and the fit run's residual is kept as a step in time (beside it the relay gains 172); the step
+    # at one temperature, redundant beside that step, describes both crossings, and beside it the relay gains nothing
+    model, v = _confirmed(lambda t: 0.004 * (_staircase(t) >= 22.0), 8, ("hysteresis",), profile=_staircase)
+    assert model.order == ()
+    assert v["present"] and [u["effect"] for u in v["unlisted"]] == ["hysteresis"]
+    assert "beside the temperature step" in v["unlisted"][0]["reason"], v["unlisted"]
+
+
+def test_a_hysteresis_beside_a_step_in_time_stays():
+    # a true relay of 7.2 deg/h (deadband 4 degC) and a 3.6 deg/h step at 40 % of the run: the step is unexplained,
+    # the relay earns its place beside it and beside any other description of the residual
+    from gyrocomp.sim.vocabulary.hysteresis import OPERATORS
+
+    model, v = _confirmed(lambda t: 0.002 * OPERATORS["relay"](t, _temperature(t), 4.0) + 0.001 * (t > 0.4 * t[-1]), 9, ("hysteresis",))
+    assert model.order == ("hysteresis",)
+    assert v["present"] and v["unlisted"] == []
+    assert any(w["test"] == "step" for w in v["where"]), v["where"]
 
 
 def test_a_noise_term_failing_its_signature_is_unlisted():
