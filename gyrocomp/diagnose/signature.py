@@ -23,11 +23,11 @@ b. **innovations** -- the block-mean residual whitened under the model's
    * temperature: the score statistic of ``temperature_bins`` equal-width
      temperature-bin indicators, whitened (a function of temperature beyond
      the model's that the noise absorbed), ``chi^2`` of their rank beyond the
-     design;
-   * temperature step: the largest score of a step at one temperature,
-     ``1[T >= c]`` at the inner edges of ``temperature_step_bins``
-     equal-width bins (a bias discontinuity the noise absorbed), with the
-     union bound over the edges (:func:`threshold_scan`);
+     design, and a step at one temperature, the largest score of ``1[T >= c]`` at
+     the inner edges of ``temperature_step_bins`` equal-width bins (a bias
+     discontinuity the noise absorbed) with the union bound over the edges
+     (:func:`threshold_scan`); the two make one test, ``p = 2 min`` of
+     theirs, so that the family keeps its number of tests;
    * extreme and stationary: at the timescales the term explains (c), the
      largest increment of the residual's ``tau`` means in units of its
      standard deviation under the model (a step is one large increment where
@@ -255,9 +255,8 @@ def _pooled_levels(tests):
 _WHAT = {
     "ljung_box": "the innovations are autocorrelated (Ljung-Box): the residual is not the claimed noise",
     "trend": "the innovations carry a trend in time: a deterministic drift is absorbed as noise",
-    "temperature": "the innovations follow the temperature changes: a temperature effect is absorbed as noise",
+    "temperature": "the innovations follow the temperature changes (bins, or a step at one temperature): a temperature effect is absorbed as noise",
     "step": "the residual holds a step that the noise absorbed",
-    "temperature_step": "the innovations step at one temperature, heating and cooling alike: a bias discontinuity in temperature is absorbed as noise",
     "extreme": "one increment of the residual is far beyond the noise's spread: a step is absorbed as noise",
 }
 
@@ -358,11 +357,16 @@ def _run_tests(problem, X, noise: NoiseModel, term, s: SignatureSettings):
         temp = block_means(problem.run.temperature_c, problem.run.n_per_block)[:n]
         bins = temperature_bins(temp, s.temperature_bins)
         stat, dof, p, *_ = score_test(e, Xw, linalg.solve_triangular(lower, bins, lower=True, check_finite=False))
-        out["temperature"] = {"stat": stat, "dof": dof, "p": p}
+        out["temperature"] = {"stat": stat, "dof": dof, "p": p, "by": "bins"}
         edges = temperature_edges(temp, s.temperature_step_bins, s.min_step_blocks)
         if edges.size:
+            # The bins and the step at one temperature make one test (2 min p): the family keeps its number of tests.
             found = threshold_scan(e, Xw, lower, temp, edges)
-            out["temperature_step"] = {"stat": found["stat"], "temperature_c": float(edges[found["index"]]), "p": found["p"]}
+            out["temperature"] = out["temperature"] | {
+                "p": float(min(1.0, 2.0 * min(p, found["p"]))),
+                "by": "bins" if p <= found["p"] else "step",
+                "step": {"stat": found["stat"], "temperature_c": float(edges[found["index"]]), "p": found["p"]},
+            }
     out["step"] = step_scan(e, Xw, lower, s.min_step_blocks)
     out["step"]["time_s"] = out["step"]["block"] * problem.basis.block_s
     out["allan"], out["extreme"], levels = _timescales(problem, X, cov, lower, Xw, noise, term, s)
