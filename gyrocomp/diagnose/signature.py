@@ -433,14 +433,15 @@ def step_scan(e, Xw, lower, min_blocks=4):
     -------
     dict
         ``stat`` (max ``|z|``), ``block`` (first block after the step),
-        ``size`` (the step's GLS size in the residual's unit), ``p``.
+        ``size`` (the step's GLS size in the residual's unit), ``p``,
+        ``log_p`` (as :func:`threshold_scan`).
     """
     n = e.size
     pos = np.arange(min_blocks, n - min_blocks + 1)
     if not pos.size:
-        return {"stat": 0.0, "block": 0, "size": 0.0, "p": 1.0}
+        return {"stat": 0.0, "block": 0, "size": 0.0, "p": 1.0, "log_p": 0.0}
     found = threshold_scan(e, Xw, lower, np.arange(n), pos)
-    return {"stat": found["stat"], "block": int(pos[found["index"]]), "size": found["size"], "p": found["p"]}
+    return {k: found[k] for k in ("stat", "size", "p", "log_p")} | {"block": int(pos[found["index"]])}
 
 
 def temperature_edges(temperature_c, n_bins, min_blocks):

@@ -644,8 +644,7 @@ class _Prepared:
         if "temperature" in out and self.bands.shape[1]:
             out["temperature"] = self._band_scan(e, Xw, out["temperature"])
         step = step_scan(e, Xw, self.lower, self.settings.min_step_blocks)
-        n_pos = max(e.size - 2 * self.settings.min_step_blocks + 1, 1)
-        step["log10_p"] = min(0.0, _log10(np.log(2.0 * n_pos) + stats.norm.logsf(step["stat"])))
+        step["log10_p"] = _log10(step.pop("log_p"))
         step["time_s"] = step["block"] * self.block_s
         out["step"] = step
         if self.problem.run.temperature_c is not None and self.threshold_c.size:
