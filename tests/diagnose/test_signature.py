@@ -188,11 +188,23 @@ def test_step_scan_false_alarm_rate_and_power():
 
 def test_telegraph_noise_is_not_flicker():
     # popcorn noise of 10 deg/h between its two levels under the white noise: a flicker fits its spectrum,
-    # but its level at the shortest tau flicker explains is bimodal
+    # but its level at the shortest tau flicker explains is bimodal, and its path keeps to two levels
     result = _check("bias_instability", "telegraph", 0.003, seed=21)
     assert not result.ok and not result.own_ok
-    assert any("bimodal" in r for r in result.reasons), result.reasons
-    assert result.stats["levels"]["p"] < 1e-4 and all(k < -0.5 for k in result.stats["levels"]["kurtosis"])
+    assert any("two levels" in r or "bimodal" in r for r in result.reasons), result.reasons
+    levels = result.stats["levels"]
+    assert levels["p"] < 1e-4 and all(k < -0.5 for k in levels["kurtosis"])
+    assert levels["p_kurtosis"] < 1e-4 and levels["two_levels"]["z"] > 5.0
+
+
+def test_weak_telegraph_noise_is_found_by_its_two_levels():
+    # popcorn of 4.3 deg/h, about the white noise's spread on a 40 s mean: too little to make the 40 s
+    # levels bimodal, but two levels held for minutes at a time fit the path far better than a Gaussian wander
+    result = _check("bias_instability", "telegraph", 0.0012, seed=23)
+    levels = result.stats["levels"]
+    assert not result.own_ok and any("two levels" in r for r in result.reasons), result.reasons
+    assert levels["by"] == "two_levels" and levels["p_kurtosis"] > result.stats["alpha"]
+    assert levels["two_levels"]["z"] > 3.5
 
 
 def test_flicker_levels_pass_at_their_rate():
