@@ -1,7 +1,8 @@
-"""Two levels against a Gaussian wander (gyrocomp.diagnose.two_level) on series drawn here with numpy."""
+"""Two levels against a Gaussian wander (gyrocomp.diagnose.two_level) on series drawn here with numpy, and against hmmlearn (peer)."""
 
 import numpy as np
 import pytest
+from hmmlearn.hmm import GaussianHMM
 
 from gyrocomp.diagnose import two_level as tl
 
@@ -48,6 +49,35 @@ def test_two_level_fit_recovers_a_telegraph():
         f = (f / f.sum()) @ trans * em[i]
     ll += np.log(f.sum())
     assert fitted >= ll - 0.5
+
+
+def _peer(startprob, transmat, means, var, params=""):
+    """hmmlearn's Gaussian HMM of two states with one (tied) variance, these parameters."""
+    peer = GaussianHMM(n_components=2, covariance_type="tied", init_params="", params=params, n_iter=1000, tol=1e-10)
+    peer.startprob_, peer.transmat_ = np.asarray(startprob, float), np.asarray(transmat, float)
+    peer.means_, peer.covars_ = np.asarray(means, float)[:, None], np.array([[var]])
+    return peer
+
+
+def test_forward_likelihood_matches_hmmlearn():
+    # the same two-state model, started in its stationary law: the same log-likelihood as hmmlearn's score
+    rng = np.random.default_rng(5)
+    y = _telegraph(500, 0.05, 2.0, rng) + rng.standard_normal(500)
+    stay = np.array([0.93, 0.9])
+    go = 1.0 - stay
+    ours = tl._forward(y[None, :], np.array([[-0.8, 1.1]]), np.array([0.9]), stay[None, :])[0][0]
+    peer = _peer(go[::-1] / go.sum(), [[stay[0], go[0]], [go[1], stay[1]]], [-0.8, 1.1], 0.81)
+    assert ours == pytest.approx(peer.score(y[:, None]), abs=1e-8)
+
+
+def test_baum_welch_reaches_hmmlearns_maximum():
+    # hmmlearn also fits the start law (it goes to one state: ln 2 at most beyond our stationary start)
+    rng = np.random.default_rng(6)
+    y = _telegraph(500, 0.05, 2.0, rng) + rng.standard_normal(500)
+    ours = tl.two_level_loglik(y[None, :], 300)[0]
+    peer = _peer([0.5, 0.5], [[0.9, 0.1], [0.1, 0.9]], [y.mean() - y.std(), y.mean() + y.std()], 0.36 * y.var(), "stmc")
+    best = peer.fit(y[:, None]).score(y[:, None])
+    assert best - np.log(2.0) - 0.1 <= ours <= best + 1e-6
 
 
 @pytest.mark.parametrize("phi, var", [(0.8, 0.5), (0.95, 2.0)])
