@@ -11,17 +11,17 @@ of a two-state hidden Markov model, which uses the persistence to decide
 the level of every block [1]_.
 
 :func:`statistic` is the log-likelihood ratio ``T`` of two models fitted
-to the same block means by maximum likelihood, each with four parameters
-beside the mean:
+to the same block means by maximum likelihood:
 
-* **two levels** -- ``y_i = mu_(s_i) + w_i``, ``s_i`` a two-state Markov
-  chain (stay probabilities ``p_0``, ``p_1``, started in its stationary
-  law), ``w_i ~ N(0, sigma^2)`` white: Baum-Welch (EM) from a fixed start
-  for a fixed number of iterations (:func:`two_level_loglik`);
-* **Gauss-Markov** -- ``y_i = mu + x_i + w_i``, ``x`` a stationary AR(1)
-  (``phi``, variance ``lambda sigma^2``), ``w`` white: the exact Kalman
-  likelihood with ``sigma^2`` and ``mu`` profiled out, maximised on a grid
-  of ``phi`` and ``lambda`` (:func:`markov_loglik`).
+* **two levels** (five parameters) -- ``y_i = mu_(s_i) + w_i``, ``s_i`` a
+  two-state Markov chain (stay probabilities ``p_0``, ``p_1``, started in
+  its stationary law), ``w_i ~ N(0, sigma^2)`` white: Baum-Welch (EM) from
+  a fixed start for a fixed number of iterations (:func:`two_level_loglik`;
+  its forward likelihood is hmmlearn's ``GaussianHMM`` score, tests);
+* **Gauss-Markov** (four) -- ``y_i = mu + x_i + w_i``, ``x`` a stationary
+  AR(1) (``phi``, variance ``lambda sigma^2``), ``w`` white: the exact
+  Kalman likelihood, ``mu`` the series mean and ``sigma^2`` profiled out,
+  maximised on a grid of ``phi`` and ``lambda`` (:func:`markov_loglik`).
 
 ``T`` has no chi-square law (the models are not nested), and its law under
 a Gaussian noise depends on that noise's spectrum; :func:`switching_test` reads it
