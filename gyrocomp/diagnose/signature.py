@@ -11,6 +11,18 @@ a. **agreement** -- its level is a property of the gyro, so the runs must
    one level per run (each run's white level profiled out) is ``chi^2`` with
    ``n_runs - 1`` degrees of freedom under that hypothesis (Wilks). Each
    run's 95 % profile-likelihood interval is reported.
+a'. **replication** -- its wander is drawn afresh in every run, so nothing
+   of it repeats between runs: one run's residual, averaged in bins of the
+   time since power-on (of temperature), is one column of a score test on
+   another run (``chi^2_1``, every ordered pair); and the power of the
+   innovations at one time since power-on and one period is not high in
+   every run at once: cut from power-on into halves, quarters and eighths
+   (``spectrum_parts``), each run's periodogram ordinates are independent
+   ``Exp(1)`` under the model, so their minimum over the ``R`` runs is
+   ``Exp(R)`` and the largest such minimum over the ``M`` cells has an
+   exact tail (:func:`tone_replication`). A tone or chirp tied to the time
+   since power-on repeats there whatever its phase in each run; a flicker
+   or random walk fitted to it does not.
 b. **innovations** -- the block-mean residual whitened under the model's
    noise (its levels refitted on each run by maximum likelihood) (Cholesky, time ordered: for a random walk these are, up to the
    white part, its increments) are white, Gaussian, without trend and without
@@ -83,8 +95,8 @@ c. **Allan slope** -- at every octave ``tau`` where the term carries at least
 Every test returns a p-value; all tests of a term (on all runs) share
 ``family_alpha`` by Bonferroni, so a noise term that *is* what the model
 says is refused with probability at most ``family_alpha``. The tests of the
-term's own statistics -- its level (a), its Allan slope (c), its Gaussian
-levels -- say whether the noise is of the kind claimed (``own_ok``); the
+term's own statistics -- its level (a), the independence of its spectrum
+between runs (a'), its Allan slope (c), its Gaussian levels -- say whether the noise is of the kind claimed (``own_ok``); the
 others may also fail for a structure beside a true noise term (a drift
 beside a flicker).
 
@@ -108,7 +120,7 @@ from gyrocomp.diagnose import two_level
 from gyrocomp.diagnose.gap import effective_dof
 from gyrocomp.diagnose.likelihood import NoiseModel, block_means, fit_noise, merge_blocks, profile_deviance
 
-__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "column_scores", "threshold_scan", "step_scan", "temperature_bins", "temperature_edges", "level_test", "bartlett"]
+__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "column_scores", "threshold_scan", "step_scan", "temperature_bins", "temperature_edges", "level_test", "bartlett", "tone_replication"]
 
 TERMS = ("rate_random_walk", "bias_instability")
 """The noise terms a signature is checked for."""
@@ -134,6 +146,7 @@ class SignatureSettings:
     two_level_draws: int = 100
     two_level_iterations: int = 40
     two_level_seed: int = 0
+    spectrum_parts: tuple = (2, 4, 8)
 
 
 def get_config(path="unexplained") -> SignatureSettings:
@@ -153,11 +166,15 @@ class Signature:
         One sentence per failed test (empty when `ok`).
     stats : dict
         ``alpha`` (per test), ``agreement`` (per-run levels, 95 % intervals,
-        statistic, p), ``levels`` (the pooled Gaussian-levels test), ``runs``
-        (per run: each test's statistic and p).
+        statistic, p), ``levels`` (the pooled Gaussian-levels test),
+        ``replication`` (one per ordered pair of runs and binning),
+        ``spectrum`` (:func:`tone_replication`, the tone's period and window
+        in seconds; None for one run), ``runs`` (per run: each test's
+        statistic and p).
     own_ok : bool
         The tests of the term's own statistics passed (level agreement,
-        Allan slope, Gaussian levels): a failure of the others alone may be a
+        a spectrum that does not repeat between runs, Allan slope, Gaussian
+        levels): a failure of the others alone may be a
         structure beside a true noise term.
     """
 
@@ -208,10 +225,14 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
         own.append(fit_noise(p.y, X, p.basis, model.noise, free)[0])
         per_run.append({"noise": own[-1].datasheet_units(), **_run_tests(p, X, own[-1], term, s)})
     agreement = _agreement(runs, designs, model.noise, term, s) if len(runs) > 1 else None
-    replication = _replication(runs, designs, own, s) if len(runs) > 1 else []
+    replication, spectrum = [], None
+    if len(runs) > 1:
+        whitened = [innovations(p.y, X, p.basis.covariance(noise)) for p, X, noise in zip(runs, designs, own)]
+        replication = _replication(runs, designs, whitened, s)
+        spectrum = _spectrum(runs, [e for e, *_ in whitened], s)
     levels = _pooled_levels([out.pop("levels") for out in per_run if "levels" in out])
     n_tests = sum(len([k for k in out if k not in ("noise", "allan")]) + len(out["allan"]) for out in per_run)
-    n_tests += len(replication) + (agreement is not None) + (levels is not None)
+    n_tests += len(replication) + (agreement is not None) + (levels is not None) + (spectrum is not None)
     alpha = s.family_alpha / max(n_tests, 1)
     reasons, own_failed = [], False
     for p, out in zip(runs, per_run):
@@ -252,13 +273,23 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
                 f"the residual's {levels['tau_s'][0]:.0f} s level is bimodal, not the Gaussian level of flicker (excess kurtosis "
                 f"{kurt} on the model's scale; p = {levels['p']:.2g}): a noise switching between a few levels (telegraph, popcorn)"
             )
+    if spectrum is not None and spectrum["p"] < alpha:
+        own_failed = True
+        start, end = spectrum["window_s"]
+        power = ", ".join(f"{v:.1f}" for v in spectrum["power"])
+        reasons.append(
+            f"a tone of period {spectrum['period_s']:.0f} s repeats in every run {start:.0f}-{end:.0f} s after power-on "
+            f"(whitened periodogram {power} times the model's; p = {spectrum['p']:.2g}): a disturbance tied to the "
+            f"time since power-on, where the wander of {term} does not repeat"
+        )
     for rep in replication:
         if rep["p"] < alpha:
             reasons.append(
                 f"the {rep['of']} residual of {rep['source']} repeats in {rep['target']} (p = {rep['p']:.2g}): "
                 "a deterministic effect, where a random wander would not repeat"
             )
-    stats_out = {"alpha": alpha, "n_tests": n_tests, "agreement": agreement, "levels": levels, "replication": replication, "runs": per_run}
+    stats_out = {"alpha": alpha, "n_tests": n_tests, "agreement": agreement, "levels": levels, "replication": replication,
+                 "spectrum": spectrum, "runs": per_run}
     return Signature(not reasons, tuple(reasons), stats_out, not own_failed)
 
 
@@ -654,7 +685,7 @@ def level_test(u, cov):
     return {"stat": stat, "kurtosis": q, "var": var, "p": float(stats.norm.cdf(stat))}
 
 
-def _replication(runs, designs, noises, s: SignatureSettings):
+def _replication(runs, designs, whitened, s: SignatureSettings):
     """Test (a'): does one run's slow residual, as a function of time or of temperature, repeat in another run?
 
     For every ordered pair of runs the source run's GLS residual is averaged
@@ -665,9 +696,7 @@ def _replication(runs, designs, noises, s: SignatureSettings):
     the target's, so the statistic is ``chi^2_1`` when the model holds.
     """
     prepared = []
-    for p, X, noise in zip(runs, designs, noises):
-        cov = p.basis.covariance(noise)
-        e, Xw, lower = innovations(p.y, X, cov)
+    for p, X, (e, Xw, lower) in zip(runs, designs, whitened):
         beta, *_ = linalg.lstsq(Xw, linalg.solve_triangular(lower, p.y, lower=True, check_finite=False), cond=1e-12)
         t = np.arange(p.y.size) * p.basis.block_s
         temp = None
@@ -696,6 +725,81 @@ def _binned(x_source, r_source, x_target, edges):
     src = np.searchsorted(edges, x_source, side="right")
     means = np.bincount(src, weights=r_source, minlength=k) / np.maximum(np.bincount(src, minlength=k), 1)
     return means[np.searchsorted(edges, x_target, side="right")]
+
+
+def tone_replication(innovations, parts):
+    """Whether a tone repeats in every run at the same time since power-on: the largest run-wise minimum of the periodograms.
+
+    Each run's innovations are cut from power-on into segments of ``L =
+    n_min // parts`` blocks (``n_min`` the shortest run); segment ``j`` of
+    run ``r`` gives the periodogram ``I_rjk = |sum_t e_t exp(-2 pi i k t /
+    L)|^2 / L`` at the inner Fourier frequencies ``k = 1 .. ceil(L/2) - 1``.
+    When the model holds the innovations are white with unit variance, so
+    the ``I_rjk`` are independent ``Exp(1)`` and their minimum over the
+    ``R`` runs, ``m_jk``, is ``Exp(R)``: a wander, however large, does not
+    put its power at the same time and frequency in independent runs, where
+    a disturbance tied to the time since power-on (a tone, a chirp) does,
+    whatever its phase. Over the ``M`` cells ``P(max m >= x) = 1 - (1 -
+    exp(-R x))^M``; Bonferroni over the segment lengths.
+
+    Parameters
+    ----------
+    innovations : sequence of ndarray
+        One run's whitened residual each (:func:`innovations`), of blocks of one length.
+    parts : sequence of int
+        The shortest run is cut into this many segments, one segment length each.
+
+    Returns
+    -------
+    dict or None
+        ``p``, the strongest cell's ``segment`` and ``bin`` (``k``),
+        ``blocks`` (``L``), ``power`` (its ``I`` in each run), ``cells``
+        (``M``); None with fewer than two runs or no length giving a bin.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> t = np.arange(720)
+    >>> noise = [rng.standard_normal(720) for _ in range(2)]
+    >>> tone = [e + 0.5 * np.sin(2 * np.pi * t / 30.0 + phase) for e, phase in zip(noise, (0.3, 2.0))]
+    >>> bool(tone_replication(noise, (2, 4))["p"] > 0.01), bool(tone_replication(tone, (2, 4))["p"] < 1e-6)
+    (True, True)
+    """
+    if len(innovations) < 2:
+        return None
+    n = min(e.size for e in innovations)
+    best = None
+    for k in parts:
+        length = n // k
+        if length < 4:
+            continue
+        power = np.array([np.abs(np.fft.rfft(e[: k * length].reshape(k, length), axis=1)[:, 1:(length + 1) // 2]) ** 2 / length
+                          for e in innovations])
+        low = power.min(axis=0)
+        j, b = np.unravel_index(np.argmax(low), low.shape)
+        p = float(-np.expm1(low.size * np.log1p(-np.exp(-len(innovations) * low[j, b]))))
+        if best is None or p < best["p"]:
+            best = {"p": p, "segment": int(j), "bin": int(b) + 1, "blocks": int(length), "power": power[:, j, b].tolist(), "cells": int(low.size)}
+    if best is not None:
+        best["p"] = float(min(1.0, best["p"] * len(parts)))
+    return best
+
+
+def _spectrum(runs, es, s: SignatureSettings):
+    """Test (a', spectrum): :func:`tone_replication` of the runs' innovations, with the tone's period and window in seconds.
+
+    Runs whose blocks differ in length (runs of different durations) are
+    not compared (None).
+    """
+    block_s = {p.basis.block_s for p in runs}
+    if len(block_s) != 1:
+        return None
+    found = tone_replication(es, s.spectrum_parts)
+    if found is None:
+        return None
+    tb = block_s.pop()
+    span = found["blocks"] * tb
+    return found | {"period_s": span / found["bin"], "window_s": [found["segment"] * span, (found["segment"] + 1) * span]}
 
 
 def _agreement(runs, designs, noise: NoiseModel, term, s: SignatureSettings):

@@ -7,6 +7,8 @@ Gauss-Markov covariance); the noise term is fitted by
 :func:`gyrocomp.diagnose.select.extend` as the diagnosis would.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -44,6 +46,9 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0, bias=0.0, hours=8.0, fs=1.0)
     elif kind == "transient":
         # a one-off bump in time, 0.02 of the run wide: a random walk takes it as a burst of wander
         x += amp * np.exp(-0.5 * ((t - 0.7 * t[-1]) / (0.02 * t[-1])) ** 2)
+    elif kind == "chirp":
+        # a tone whose period grows from 20 to 40 min over the run, its phase at power-on drawn per run
+        x += amp * np.sin(2 * np.pi * t[-1] / 1200.0 * np.log1p(t / t[-1]) + rng.uniform(0, 2 * np.pi))
     elif kind == "telegraph":
         # random telegraph levels +-amp/2, exponential dwell of 500 s mean (popcorn noise)
         switches = np.cumsum(rng.exponential(500.0, size=int(4 * t[-1] / 500.0) + 16))
@@ -111,16 +116,51 @@ def test_a_step_at_one_temperature_is_refused_as_a_temperature_effect():
 
 def test_one_off_transient_is_refused_as_not_stationary():
     # 14 deg/h for about 10 min at 70 % of each run: no step, trend or temperature test sees it (they pass
-    # with the stationarity test switched off), but the increments at the taus the walk explains carry
-    # their spread in one part of the run
+    # with the stationarity and spectrum tests switched off), but the increments at the taus the walk explains
+    # carry their spread in one part of the run; and, at one time after power-on in both runs, its power repeats
     runs = _problems(_recording(10, "transient", 0.004), _recording(1010, "transient", 0.004))
     model = extend(runs[0], fit_baseline(runs[0]), "rate_random_walk")
-    off = sg.SignatureSettings(min_segment_increments=10**6)
+    off = sg.SignatureSettings(min_segment_increments=10**6, spectrum_parts=())
     assert sg.check("rate_random_walk", runs, model, off).ok
-    result = sg.check("rate_random_walk", runs, model)
+    result = sg.check("rate_random_walk", runs, model, dataclasses.replace(sg.SignatureSettings(), spectrum_parts=()))
     assert not result.ok and not result.own_ok
     assert any("change their spread" in r for r in result.reasons), result.reasons
     assert all(out["extreme"]["by"] == "stationary" for out in result.stats["runs"])
+    tone = sg.check("rate_random_walk", runs, model).stats["spectrum"]
+    assert tone["p"] < 1e-4 and tone["window_s"][0] <= 0.7 * 8 * 3600 <= tone["window_s"][1], tone
+
+
+def test_a_chirp_that_repeats_after_power_on_is_not_flicker():
+    # a tone of 2.2 deg/h whose period grows from 20 to 40 min, at a different phase in each run: flicker takes it
+    # with every other statistic of its own (they pass with the spectrum test switched off), but its power sits
+    # at the same time and period in both runs, where a wander's does not
+    runs = _problems(_recording(41, "chirp", 0.0006), _recording(1041, "chirp", 0.0006))
+    model = extend(runs[0], fit_baseline(runs[0]), "bias_instability")
+    assert sg.check("bias_instability", runs, model, dataclasses.replace(sg.SignatureSettings(), spectrum_parts=())).ok
+    result = sg.check("bias_instability", runs, model)
+    assert not result.ok and not result.own_ok
+    assert len(result.reasons) == 1 and "repeats in every run" in result.reasons[0], result.reasons
+    tone = result.stats["spectrum"]
+    # the tone's period in the later half of the run: 1200 s (1 + t / T), 1800-2400 s
+    assert tone["p"] < 1e-6 and tone["window_s"] == [14400.0, 28800.0] and 1800.0 < tone["period_s"] < 2400.0, tone
+    # in one run only it does not repeat
+    alone = _problems(_recording(41, "chirp", 0.0006), _recording(1041, "none"))
+    assert sg.check("bias_instability", alone, extend(alone[0], fit_baseline(alone[0]), "bias_instability")).stats["spectrum"]["p"] > 0.01
+
+
+def test_tone_replication_is_calibrated_on_white_innovations():
+    # independent white runs (two of one length, three of different lengths): p below 0.05 and 0.01 at those rates
+    rng = np.random.default_rng(5)
+    for sizes in ([720, 720], [700, 500, 650]):
+        p = np.array([sg.tone_replication([rng.standard_normal(n) for n in sizes], (2, 4, 8))["p"] for _ in range(2000)])
+        for rate in (0.05, 0.01):
+            assert np.mean(p < rate) < rate + 3.0 * np.sqrt(rate * (1.0 - rate) / 2000), (sizes, rate)
+        assert np.mean(p < 0.05) > 0.02, sizes  # not blind: Bonferroni over three lengths costs little
+    # a tone in every run, each at its own phase, under white innovations of unit variance
+    t = np.arange(720)
+    tone = [rng.standard_normal(720) + 0.4 * np.sin(2 * np.pi * t / 24.0 + rng.uniform(0, 6)) for _ in range(2)]
+    found = sg.tone_replication(tone, (2, 4, 8))
+    assert found["p"] < 1e-6 and found["blocks"] / found["bin"] == pytest.approx(24.0, rel=0.05), found
 
 
 def test_bartlett_is_calibrated_on_random_walk_increments():
