@@ -169,6 +169,12 @@ class NoiseBasis:
         with gaps between them (default: contiguous blocks, ``i T_b``). The
         random walk keeps wandering and the flicker decorrelating through a
         gap; nothing is interpolated.
+
+    Attributes
+    ----------
+    contiguous : bool
+        The blocks follow each other without gaps (``starts`` absent, or
+        ``T_b`` apart).
     """
 
     def __init__(self, n_blocks, block_s, starts=None):
@@ -177,6 +183,7 @@ class NoiseBasis:
         idx = np.arange(self.n_blocks)
         self.white = np.eye(self.n_blocks) / self.block_s
         start = idx * self.block_s if starts is None else np.asarray(starts, dtype=float)
+        self.contiguous = bool(np.allclose(np.diff(start), self.block_s))
         centre = start + 0.5 * self.block_s
         earlier = np.minimum.outer(idx, idx)
         self.random_walk = centre[earlier]

@@ -96,9 +96,9 @@ Every test returns a p-value; all tests of a term (on all runs) share
 ``family_alpha`` by Bonferroni, so a noise term that *is* what the model
 says is refused with probability at most ``family_alpha``. The tests of the
 term's own statistics -- its level (a), the independence of its spectrum
-between runs (a'), its Allan slope (c), its Gaussian levels -- say whether the noise is of the kind claimed (``own_ok``); the
-others may also fail for a structure beside a true noise term (a drift
-beside a flicker).
+between runs (a'), its Allan slope (c), its Gaussian levels -- say whether
+the noise is of the kind claimed (``own_ok``); the others may also fail for
+a structure beside a true noise term (a drift beside a flicker).
 
 References
 ----------
@@ -788,11 +788,12 @@ def tone_replication(innovations, parts):
 def _spectrum(runs, es, s: SignatureSettings):
     """Test (a', spectrum): :func:`tone_replication` of the runs' innovations, with the tone's period and window in seconds.
 
-    Runs whose blocks differ in length (runs of different durations) are
-    not compared (None).
+    Runs whose blocks differ in length (runs of different durations), or
+    with gaps between their blocks (a recording in segments: its block
+    index is not its time), are not compared (None).
     """
     block_s = {p.basis.block_s for p in runs}
-    if len(block_s) != 1:
+    if len(block_s) != 1 or not all(p.basis.contiguous for p in runs):
         return None
     found = tone_replication(es, s.spectrum_parts)
     if found is None:

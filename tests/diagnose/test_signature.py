@@ -8,6 +8,7 @@ Gauss-Markov covariance); the noise term is fitted by
 """
 
 import dataclasses
+import types
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from scipy import stats
 from gyrocomp.diagnose import DiagnoseSettings
 from gyrocomp.diagnose import signature as sg
 from gyrocomp.diagnose.effects import Run, TemperatureScale
+from gyrocomp.diagnose.likelihood import NoiseBasis
 from gyrocomp.diagnose.select import Problem, extend, fit_baseline
 from gyrocomp.sim.noise import flicker
 
@@ -161,6 +163,19 @@ def test_tone_replication_is_calibrated_on_white_innovations():
     tone = [rng.standard_normal(720) + 0.4 * np.sin(2 * np.pi * t / 24.0 + rng.uniform(0, 6)) for _ in range(2)]
     found = sg.tone_replication(tone, (2, 4, 8))
     assert found["p"] < 1e-6 and found["blocks"] / found["bin"] == pytest.approx(24.0, rel=0.05), found
+
+
+def test_tone_replication_needs_contiguous_blocks_of_one_length():
+    # a recording in segments: its block index is not its time, so no periodogram is read from it
+    rng = np.random.default_rng(7)
+    e = [rng.standard_normal(40) for _ in range(2)]
+    steady = NoiseBasis(40, 10.0)
+    gapped = NoiseBasis(40, 10.0, np.r_[np.arange(20), np.arange(30, 50)] * 10.0)
+    assert steady.contiguous and not gapped.contiguous
+    settings = sg.SignatureSettings()
+    for bases, compared in [((steady, steady), True), ((steady, gapped), False), ((steady, NoiseBasis(40, 20.0)), False)]:
+        runs = [types.SimpleNamespace(basis=b) for b in bases]
+        assert (sg._spectrum(runs, e, settings) is not None) == compared
 
 
 def test_bartlett_is_calibrated_on_random_walk_increments():
