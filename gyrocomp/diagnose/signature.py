@@ -219,15 +219,16 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
     if extra is not None:
         designs = [np.hstack([X, G]) for X, G in zip(designs, extra)]
     free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
-    per_run, own = [], []
+    per_run, own, whitened = [], [], []
     for p, X in zip(runs, designs):
         # Each run is judged at its own maximum-likelihood levels: whether they agree is test (a).
         own.append(fit_noise(p.y, X, p.basis, model.noise, free)[0])
-        per_run.append({"noise": own[-1].datasheet_units(), **_run_tests(p, X, own[-1], term, s)})
+        cov = p.basis.covariance(own[-1])
+        whitened.append(innovations(p.y, X, cov))
+        per_run.append({"noise": own[-1].datasheet_units(), **_run_tests(p, X, own[-1], cov, whitened[-1], term, s)})
     agreement = _agreement(runs, designs, model.noise, term, s) if len(runs) > 1 else None
     replication, spectrum = [], None
     if len(runs) > 1:
-        whitened = [innovations(p.y, X, p.basis.covariance(noise)) for p, X, noise in zip(runs, designs, own)]
         replication = _replication(runs, designs, whitened, s)
         spectrum = _spectrum(runs, [e for e, *_ in whitened], s)
     levels = _pooled_levels([out.pop("levels") for out in per_run if "levels" in out])
@@ -409,11 +410,15 @@ def ljung_box(e, lags):
     return q, float(stats.chi2.sf(q, lags))
 
 
-def _run_tests(problem, X, noise: NoiseModel, term, s: SignatureSettings):
-    """Tests (b) and (c) of the module docstring on one run."""
+def _run_tests(problem, X, noise: NoiseModel, cov, whitened, term, s: SignatureSettings):
+    """Tests (b) and (c) of the module docstring on one run.
+
+    `cov` is the block means' covariance under `noise`, and `whitened` the
+    :func:`innovations` under it (computed once per run, shared with the
+    replication tests).
+    """
     y = problem.y
-    cov = problem.basis.covariance(noise)
-    e, Xw, lower = innovations(y, X, cov)
+    e, Xw, lower = whitened
     n = y.size
     out = {}
     q, p = ljung_box(e, min(s.ljung_box_lags, n // 4))
