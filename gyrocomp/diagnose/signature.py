@@ -176,12 +176,16 @@ class Signature:
         a spectrum that does not repeat between runs, Allan slope, Gaussian
         levels): a failure of the others alone may be a
         structure beside a true noise term.
+    tone_repeats : bool
+        The spectrum replication refused the term: a tone at the same time
+        since power-on in every run.
     """
 
     ok: bool
     reasons: tuple
     stats: dict
     own_ok: bool = True
+    tone_repeats: bool = False
 
 
 def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), extra=None) -> Signature:
@@ -274,7 +278,8 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
                 f"the residual's {levels['tau_s'][0]:.0f} s level is bimodal, not the Gaussian level of flicker (excess kurtosis "
                 f"{kurt} on the model's scale; p = {levels['p']:.2g}): a noise switching between a few levels (telegraph, popcorn)"
             )
-    if spectrum is not None and spectrum["p"] < alpha:
+    tone_repeats = spectrum is not None and spectrum["p"] < alpha
+    if tone_repeats:
         own_failed = True
         start, end = spectrum["window_s"]
         power = ", ".join(f"{v:.1f}" for v in spectrum["power"])
@@ -291,7 +296,7 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
             )
     stats_out = {"alpha": alpha, "n_tests": n_tests, "agreement": agreement, "levels": levels, "replication": replication,
                  "spectrum": spectrum, "runs": per_run}
-    return Signature(not reasons, tuple(reasons), stats_out, not own_failed)
+    return Signature(not reasons, tuple(reasons), stats_out, not own_failed, tone_repeats)
 
 
 def _pooled_levels(tests):

@@ -198,7 +198,11 @@ def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSett
        drift is reported) -- unless the tests of its own statistics (level
        agreement, Allan slope, Gaussian levels) refuse it, and still refuse
        it with that structure in the fit run's design: then the wander is
-       not that noise. When the tests find nothing in its place,
+       not that noise. A tone that repeats in every run at the same time
+       since power-on (the signature's spectrum replication) is not judged
+       again beside that structure: the test reads the smallest power over
+       the runs, which a structure taken out of the fit run alone can only
+       lower, whatever the runs share. When the tests find nothing in its place,
        the term goes if its own statistics refused it (at the signature's
        false-refusal rate) and stays if only the other tests did (a trend
        beside it);
@@ -279,8 +283,9 @@ def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSett
             if g is not None and g <= search.margin:
                 standing_in[t] = g
             elif not result["signatures"][t]["own_ok"] and (
-                G is None or not signature.check(t, [p for _, p in runs], model, signature_settings,
-                                                 [G if p is fit_p else np.empty((p.y.size, 0)) for _, p in runs]).own_ok
+                G is None or result["signatures"][t]["tone_repeats"]
+                or not signature.check(t, [p for _, p in runs], model, signature_settings,
+                                       [G if p is fit_p else np.empty((p.y.size, 0)) for _, p in runs]).own_ok
             ):
                 standing_in[t] = -np.inf
         if standing_in:
@@ -455,7 +460,7 @@ def _verdict(runs, model, settings, baseline_residuals, signature_settings):
     for term in TERMS:
         if term in getattr(model, "order", ()) and getattr(model.noise, term) > 0.0:
             sig = signature.check(term, [p for _, p in runs], model, signature_settings)
-            signatures[term] = {"ok": sig.ok, "own_ok": sig.own_ok, "reasons": list(sig.reasons)}
+            signatures[term] = {"ok": sig.ok, "own_ok": sig.own_ok, "tone_repeats": sig.tone_repeats, "reasons": list(sig.reasons)}
             if not sig.ok:
                 where.append({"run": "all", "test": f"signature:{term}", "p": sig.stats.get("alpha")})
                 hints.append(f"the selected {term} does not show its own signature: " + "; ".join(sig.reasons[:3]))
