@@ -19,12 +19,11 @@ independently of what the diagnosis selected:
   draws)``). A walk at the level fitted to one event per run makes one such
   excursion in 8 h with that probability: a large ``p`` says the data cannot
   tell the event from the walk.
-* **two levels** (popcorn): the signature's two-level statistic
-  (:func:`gyrocomp.diagnose.two_level.switching_test`) of each run's
-  residual under a fitted ``bias_instability`` (its Markov form where that
-  fits better), pooled over the runs as the signature pools it
-  (``sum (T - m) / sqrt(sum v)``), against the z the signature's share of
-  its family asks (about 3.5).
+* **two levels** (popcorn): the signature's own two-level statistic
+  (:func:`gyrocomp.diagnose.signature.check` of a ``bias_instability``
+  fitted on the fit run, its Markov form where that fits better), per run
+  and pooled over the runs, against the z the signature's share of its
+  family asks (about 3.5).
 
 The likelihood is that of the diagnosis (:mod:`gyrocomp.diagnose.likelihood`)
 on at most 240 merged blocks per run (the signature's ``max_blocks``).
@@ -56,10 +55,9 @@ sys.path.insert(0, str(HERE.parent))
 
 import independent_gen as gen  # noqa: E402
 from gyrocomp.diagnose import problems  # noqa: E402
-from gyrocomp.diagnose import two_level  # noqa: E402
 from gyrocomp.diagnose.likelihood import fit_noise, merge_blocks  # noqa: E402
 from gyrocomp.diagnose.select import extend, fit_baseline  # noqa: E402
-from gyrocomp.diagnose.signature import TERMS, SignatureSettings, column_scores, innovations  # noqa: E402
+from gyrocomp.diagnose.signature import TERMS, SignatureSettings, check, column_scores, innovations  # noqa: E402
 from gyrocomp.recordings import Recording  # noqa: E402
 
 KINDS = {"bias_step/mode_hop": "step", "transient/gaussian_bump": "bump", "telegraph_noise/popcorn": "levels"}
@@ -89,7 +87,11 @@ def bump_columns(n, widths=10):
 
 
 def gain_beside_event(y, X, basis, noise, term, G):
-    """``-2 log L`` gained by `term` beside the most likely column of `G` (found under the model without `term`)."""
+    """``-2 log L`` gained by `term` beside the most likely column of `G` (found under the model without `term`).
+
+    :func:`gyrocomp.diagnose.unexplained.gain_beside` without its parameter
+    charge, on block means `y` given here (the run's, or a draw's).
+    """
     free = ("arw",) + tuple(t for t in TERMS if getattr(noise, t) > 0.0)
     less = tuple(f for f in free if f != term)
     without = dataclasses.replace(noise, **{term: 0.0})
@@ -115,36 +117,24 @@ def event_test(problem, model, term, event, draws, seed):
             "null_median": float(np.median(null)), "level": float(getattr(noise, term))}
 
 
-def levels_test(problem, model, s: SignatureSettings, seed):
-    """The signature's two-level statistic of the run's GLS residual under `model` (its noise refitted on the run)."""
-    X = problem.design_blocks(model.spec)[0]
-    y, n = problem.y, problem.y.size
-    free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
-    noise = fit_noise(y, X, problem.basis, model.noise, free)[0]
-    lower = linalg.cholesky(problem.basis.covariance(noise), lower=True)
-    Xw = linalg.solve_triangular(lower, X, lower=True)
-    resid_maker = np.eye(n) - X @ linalg.pinv(Xw) @ linalg.solve_triangular(lower, np.eye(n), lower=True)
-    return two_level.switching_test(resid_maker @ y, resid_maker @ lower, s.two_level_draws, s.two_level_iterations, seed)
-
-
 def _recording(cols, name):
     t = cols["time"]
     return Recording({"time": t, "rate": cols["rate"], "temperature": cols["temperature"]}, name, "", float(1.0 / np.median(np.diff(t))))
 
 
-def measure(case, draws):
-    """Every measurement of one case (a dict for the JSON)."""
+def measure(case, draws, event=None):
+    """Every measurement of one case (a dict for the JSON); `event` ("step", "bump", "levels") defaults to its kind's."""
     runs, realised = gen.generate_pair(case)
     fit_p, (hold_p,), _ = problems(_recording(runs["fit"], "fit"), [_recording(runs["holdout"], "holdout")])
     base = fit_baseline(fit_p)
-    event = KINDS[case["key"]]
+    event = event or KINDS[case["key"]]
     out = {"seed": case["seed"], "index": case["index"], "key": case["key"], "fs_hz": case["fs_hz"],
            "z": realised.get("z"), "params": case["params"]}
     if event == "levels":
         model = extend(fit_p, base, "bias_instability")
-        tests = [levels_test(p, model, SignatureSettings(), [case["seed"], case["index"], k]) for k, p in enumerate((fit_p, hold_p))]
-        pooled = sum(t["stat"] - t["mean"] for t in tests) / np.sqrt(sum(t["var"] for t in tests))
-        return out | {"runs": [{"z": t["z"]} for t in tests], "pooled_z": float(pooled),
+        levels = check("bias_instability", [fit_p, hold_p], model).stats["levels"]
+        two = levels["two_levels"] if levels is not None else {"z": None, "runs": []}
+        return out | {"runs": [{"z": t["z"]} for t in two["runs"]], "pooled_z": two["z"],
                       "correlation_s": model.noise.bias_correlation_s}
     for term in TERMS:
         model = extend(fit_p, base, term)
@@ -160,7 +150,7 @@ def table(results):
     for r in results:
         def cell(term):
             return ", ".join(f"{t['gain']:.1f} ({t['p']:.2f})" for t in r[term]) if term in r else ""
-        levels = ", ".join(f"{t['z']:.1f}" for t in r["runs"]) + f"; {r['pooled_z']:.1f}" if "runs" in r else ""
+        levels = ", ".join(f"{t['z']:.1f}" for t in r["runs"]) + f"; {r['pooled_z']:.1f}" if r.get("pooled_z") is not None else ""
         lines.append(f"| {r['seed']} | {r['index']} | {r['key']} | {r['fs_hz']:g} | {r['z']:.1f} | {cell('rate_random_walk')} | "
                      f"{cell('bias_instability')} | {levels} |")
     return "\n".join(lines) + "\n"
