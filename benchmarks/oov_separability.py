@@ -62,8 +62,8 @@ from gyrocomp.recordings import Recording  # noqa: E402
 
 KINDS = {"bias_step/mode_hop": "step", "transient/gaussian_bump": "bump", "telegraph_noise/popcorn": "levels"}
 """The generator's kinds measured here, and the event each is tested as."""
-MIN_BLOCKS = 4
-"""An event spans at least this many merged blocks (the signature's ``min_step_blocks``)."""
+MIN_BLOCKS = SignatureSettings().min_step_blocks
+"""An event spans at least this many merged blocks (the signature's, as its step scan)."""
 
 
 def step_columns(n):
