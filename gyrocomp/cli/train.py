@@ -78,3 +78,16 @@ def train(
             markup=False,
             highlight=False,
         )
+    for line in not_fitted_notes(model):
+        typer.echo(f"gyrocomp: note: {line}", err=True)
+
+
+def not_fitted_notes(model: dict) -> list[str]:
+    """One line per term a model left out, naming the axes it was left out of (``not_fitted`` of each segment)."""
+    axes_of: dict[str, list[str]] = {}
+    for axis, m in model["axes"].items():
+        for segment in m["segments"].values():
+            for refusal in segment.get("not_fitted", []):
+                axes_of.setdefault(refusal["reason"], []).append(axis)
+    return [f"[{', '.join(dict.fromkeys(axes))}] {reason}" for reason, axes in axes_of.items()]
+

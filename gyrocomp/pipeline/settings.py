@@ -45,13 +45,13 @@ LEARNERS = {
 }
 """Learner names usable in ``[model.<segment>] learner = ...`` and their classes in :mod:`gyrocomp.models`."""
 
-PIPELINE_KINDS = ("pe-lcd-anfis", "iceemdan-se-tfpf-nsga2elm", "polynomial", "bp", "elm", "anfis", "nsga2elm")
+PIPELINE_KINDS = ("pe-lcd-anfis", "iceemdan-se-tfpf-nsga2elm", "polynomial", "firmware", "bp", "elm", "anfis", "nsga2elm")
 """Pipeline labels ``[pipeline] kind`` may take: the two papers' pipelines and the direct comparators."""
 
 SEGMENTS = ("drift", "mixed")
 """Segments that can carry a learner; a direct pipeline models the whole rate as ``drift``."""
 
-MODEL_KEYS = ("clip_inputs", "clip_output", "max_samples", "min_temperature_span_c", "min_temperature_rate_span_c_per_s")
+MODEL_KEYS = ("clip_inputs", "clip_output", "max_samples", "min_temperature_span_c", "min_temperature_rate_span_c_per_s", "min_unique_variance")
 """Keys of the ``[model]`` table beside its segments."""
 
 
@@ -165,7 +165,13 @@ class ModelSettings:
         constant-temperature run had a dT/dt coefficient of -4.9e15).
     min_temperature_rate_span_c_per_s : float
         Likewise for the spread of dT/dt [degC/s]: a run that only ramped at
-        one rate cannot tell a dT/dt sensitivity from the offset.
+        one rate cannot tell a dT/dt sensitivity from the offset. Not
+        checked for a polynomial, which leaves such a term out instead.
+    min_unique_variance : float
+        Least share ``1 - R^2`` of a term's variation over the training
+        block means that the terms before it must leave unexplained for the
+        term to be fitted (:mod:`gyrocomp.identifiability`): 0.01, a
+        variance inflation factor of 100.
     """
 
     segments: dict
@@ -174,6 +180,7 @@ class ModelSettings:
     max_samples: int = 2000
     min_temperature_span_c: float = 2.0
     min_temperature_rate_span_c_per_s: float = 1e-4
+    min_unique_variance: float = 0.01
 
     def to_dict(self) -> dict:
         head = {
@@ -182,6 +189,7 @@ class ModelSettings:
             "max_samples": self.max_samples,
             "min_temperature_span_c": self.min_temperature_span_c,
             "min_temperature_rate_span_c_per_s": self.min_temperature_rate_span_c_per_s,
+            "min_unique_variance": self.min_unique_variance,
         }
         return {**head, **{name: spec.to_dict() for name, spec in self.segments.items()}}
 
@@ -215,7 +223,10 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
     max_samples = table.pop("max_samples", 2000)
     if isinstance(max_samples, bool) or not isinstance(max_samples, int) or max_samples < 0:
         raise InputError(f"{source} [model]: max_samples = {max_samples!r} should be an integer >= 0")
-    spans = {key: table.pop(key, default) for key, default in (("min_temperature_span_c", 2.0), ("min_temperature_rate_span_c_per_s", 1e-4))}
+    spans = {
+        key: table.pop(key, default)
+        for key, default in (("min_temperature_span_c", 2.0), ("min_temperature_rate_span_c_per_s", 1e-4), ("min_unique_variance", 0.01))
+    }
     for key, value in spans.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
             raise InputError(f"{source} [model]: {key} = {value!r} should be a finite number >= 0")

@@ -30,6 +30,7 @@ divided by its standard deviation. Both maps are stored per segment in
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING, Iterator
 
@@ -503,10 +504,11 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
         for segment, (y, offset, scale, y_offset, y_scale) in maps.items():
             means[segment][0].append(np.add.reduceat((X - offset) / scale, local_starts, axis=0) / counts[:, None])
             means[segment][1].append(np.add.reduceat((y[rows] - y_offset) / y_scale, local_starts) / counts)
-    learners = {}
+    learners, not_fitted = {}, {}
     for segment, (y, offset, scale, y_offset, y_scale) in maps.items():
         Xb, yb = np.concatenate(means[segment][0]), np.concatenate(means[segment][1])
-        learners[segment] = (model_table.segments[segment].build(seed).fit(Xb, yb), float(np.min(yb)), float(np.max(yb)))
+        learner, not_fitted[segment] = _identifiable(model_table.segments[segment], Xb * scale + offset, model_table.min_unique_variance, seed)
+        learners[segment] = (learner.fit(Xb, yb), float(np.min(yb)), float(np.max(yb)))
     squares = dict.fromkeys(targets, 0.0)
     for rows, X, _ in input_runs():
         for segment, (y, offset, scale, y_offset, y_scale) in maps.items():
@@ -517,6 +519,7 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
         learner, low, high = learners[segment]
         fitted[segment] = {
             **extra["segments"][segment],
+            "not_fitted": [refusal.to_dict() for refusal in not_fitted[segment]],
             "input_offset": offset.tolist(),
             "input_scale": scale.tolist(),
             "output_offset": y_offset,
@@ -557,12 +560,41 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
     return {**header, **body}
 
 
+def _identifiable(spec, X: np.ndarray, min_unique: float, seed) -> tuple:
+    """An unfitted learner of `spec` with only the terms the training inputs identify, and the terms it leaves out.
+
+    A polynomial drops each power of T and its dT/dt term that the block
+    means `X` (physical units: degC, degC/s) cannot tell from the terms
+    before it (:func:`gyrocomp.identifiability.polynomial_terms`). A learned
+    map of (T, dT/dt) keeps both inputs, but when dT/dt follows T on the
+    training runs the refusal is recorded all the same: what it learns of
+    dT/dt is then a guess (:mod:`gyrocomp.identifiability`).
+    """
+    from gyrocomp.identifiability import polynomial_terms
+
+    if spec.learner == "polynomial":
+        asked = spec.build(seed)
+        degree, rate_term, refused = polynomial_terms(X[:, 0], X[:, 1], asked.degree, asked.rate_term, min_unique)
+        return asked.set_params(degree=degree, rate_term=rate_term), refused
+    _, _, refused = polynomial_terms(X[:, 0], X[:, 1], 3, True, min_unique)
+    refused = [
+        dataclasses.replace(r, reason=f"{r.reason} (the {spec.learner} learner keeps its dT/dt input; what it learns of it is not identified)")
+        for r in refused
+        if r.term == "dT/dt"
+    ]
+    return spec.build(seed), refused
+
+
 def _check_rank(lo: np.ndarray, hi: np.ndarray, model_table, name: str) -> None:
-    """Refuse inputs that leave the drift model rank-deficient (see :class:`ModelSettings`)."""
-    limits = (
-        ("temperature", "degC", model_table.min_temperature_span_c, "min_temperature_span_c"),
-        ("temperature rate", "degC/s", model_table.min_temperature_rate_span_c_per_s, "min_temperature_rate_span_c_per_s"),
-    )
+    """Refuse inputs that leave the drift model rank-deficient (see :class:`ModelSettings`).
+
+    The temperature-rate span is not checked for a polynomial alone: its
+    dT/dt term is judged with its powers of T (:func:`_identifiable`) and
+    left out, not refused, on a run that ramps at one rate.
+    """
+    limits = (("temperature", "degC", model_table.min_temperature_span_c, "min_temperature_span_c"),)
+    if any(spec.learner != "polynomial" for spec in model_table.segments.values()):
+        limits += (("temperature rate", "degC/s", model_table.min_temperature_rate_span_c_per_s, "min_temperature_rate_span_c_per_s"),)
     for (what, unit, limit, key), low, high in zip(limits, lo, hi):
         if high - low < limit:
             raise InputError(

@@ -34,10 +34,18 @@ def test_constant_temperature_is_refused_naming_the_file_and_the_span(config):
 
 
 def test_a_single_ramp_rate_is_refused_naming_the_rate_span():
-    """A run that ramps at one constant rate cannot separate dT/dt sensitivity from the offset."""
+    """A run that ramps at one constant rate cannot separate dT/dt sensitivity from the offset: a learned map is refused."""
     rec = _recording(np.linspace(-20.0, 40.0, 6000), name="ramp.csv")
     with pytest.raises(InputError, match=r"ramp.csv: the training temperature rate spans only .* degC/s"):
-        train_direct(rec, load_config("polynomial"), seed=0)
+        train_direct(rec, load_config("elm"), seed=0)
+
+
+def test_a_single_ramp_rate_leaves_the_polynomial_dtdt_term_out():
+    """... and a polynomial fits its cubic in T and leaves dT/dt out, saying it does not vary."""
+    model = train_direct(_recording(np.linspace(-20.0, 40.0, 6000), name="ramp.csv"), load_config("polynomial"), seed=0)
+    segment = model["segments"]["drift"]
+    assert segment["learner"]["params"]["rate_term"] is False and segment["learner"]["params"]["degree"] == 3
+    assert [r["term"] for r in segment["not_fitted"]] == ["dT/dt"] and "does not vary" in segment["not_fitted"][0]["reason"]
 
 
 def test_a_span_just_above_the_limit_trains_to_finite_coefficients():
