@@ -21,7 +21,8 @@ import allantools.noise as an
 import numpy as np
 
 from gyrocomp import sim
-from gyrocomp.sim import model, noise
+from gyrocomp.effects import noise
+from gyrocomp.sim import model
 
 HERE = Path(__file__).resolve().parent
 FS_HZ = 100.0

@@ -201,7 +201,7 @@ class _Detector:
         return threshold(self.n_pair, effect, self.margin, n_runs=2)
 
     def noise(self):
-        from gyrocomp.diagnose.likelihood import NoiseModel
+        from gyrocomp.effects.likelihood import NoiseModel
 
         e = self.case["effects"]
         return NoiseModel(
@@ -217,7 +217,7 @@ class _Detector:
         effect's plainest form, which its columns default to.
         """
         from gyrocomp.diagnose.effects import DETERMINISTIC
-        from gyrocomp.sim.vocabulary import KINDS
+        from gyrocomp.effects.vocabulary import KINDS
 
         return {
             e: ({KINDS[e].nonlinear: p[KINDS[e].nonlinear]} if KINDS[e].nonlinear in p else {})
@@ -228,7 +228,7 @@ class _Detector:
     def evidence(self, effect, value):
         """Pair evidence of `effect` with its strength parameter at `value`, and its detection probability."""
         from gyrocomp.diagnose import detectability as dt
-        from gyrocomp.sim import effects as shapes
+        from gyrocomp.effects import shapes
 
         params = self.case["effects"][effect]
         saved = params[SCALE[effect]]

@@ -25,7 +25,7 @@ independently of what the diagnosis selected:
   and pooled over the runs, against the z the signature's share of its
   family asks (about 3.5).
 
-The likelihood is that of the diagnosis (:mod:`gyrocomp.diagnose.likelihood`)
+The likelihood is that of the diagnosis (:mod:`gyrocomp.effects.likelihood`)
 on at most 240 merged blocks per run (the signature's ``max_blocks``).
 
 Writes ``benchmarks/results/oov-separability.json`` and ``.md``.
@@ -55,7 +55,7 @@ sys.path.insert(0, str(HERE.parent))
 
 import independent_gen as gen  # noqa: E402
 from gyrocomp.diagnose import problems  # noqa: E402
-from gyrocomp.diagnose.likelihood import fit_noise, merge_blocks  # noqa: E402
+from gyrocomp.effects.likelihood import fit_noise, merge_blocks  # noqa: E402
 from gyrocomp.diagnose.select import extend, fit_baseline  # noqa: E402
 from gyrocomp.diagnose.signature import TERMS, SignatureSettings, check, column_scores, innovations  # noqa: E402
 from gyrocomp.recordings import Recording  # noqa: E402

@@ -34,7 +34,7 @@ CONFIG_DIR = _config_dir()
 In a checkout, the top-level ``configs/``; in an installed wheel, the same
 files as package data (``gyrocomp/configs/``, see ``setup.py``)."""
 
-PIPELINE_TABLES = ("pipeline", "rate", "model", "decompose", "classify", "denoise")
+PIPELINE_TABLES = ("pipeline", "rate", "model", "decompose", "classify", "denoise", "greybox")
 """Top-level tables of a pipeline config (``configs/pe-lcd-anfis.toml`` and its kin)."""
 
 T = TypeVar("T")

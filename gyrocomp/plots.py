@@ -344,6 +344,8 @@ def model_curve(model, n: int = 200) -> tuple[np.ndarray, np.ndarray]:
     """A model's drift [deg/s] along its training temperature range at dT/dt = 0 (clamped inputs)."""
     lo, hi = model.temperature_range_c
     temperature = np.linspace(lo, hi, n)
+    if model.kind == "greybox":  # a state-space model: its settled bias at each temperature
+        return temperature, model.static(temperature)
     X = np.column_stack([temperature, np.zeros(n)])
     return temperature, np.sum(list(model.predict(X, clamp=True).values()), axis=0)
 

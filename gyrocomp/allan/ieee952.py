@@ -1,6 +1,6 @@
 """The IEEE Std 952 gyro noise model: five terms, their Allan variance, spectra and units.
 
-One home for the model that :mod:`gyrocomp.allan` fits, :mod:`gyrocomp.sim.noise`
+One home for the model that :mod:`gyrocomp.allan` fits, :mod:`gyrocomp.effects.noise`
 draws, :mod:`gyrocomp.diagnose` scores and :mod:`gyrocomp.pipeline.evaluate`
 reads off. In the library's SI-like units (rate in deg/s, time in s) the
 Allan variance of the five terms is ([1]_ eq. (C.16), Table C.1)

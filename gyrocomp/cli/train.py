@@ -26,15 +26,15 @@ from gyrocomp.cli._app import (
 @app.command()
 def train(
     ctx: typer.Context,
-    components: Annotated[
-        Path,
-        typer.Argument(help="components.parquet from `gyrocomp decompose` (parallel pipelines), or any recording with temperature (direct pipelines: bp, elm, polynomial)."),
+    inputs: Annotated[
+        List[Path],
+        typer.Argument(
+            help="A recording with temperature (direct pipelines: bp, elm, polynomial, firmware), several recordings of one gyro "
+            "(greybox: each its own run), or components.parquet and classes.json from decompose and classify (parallel pipelines).",
+            show_default=False,
+        ),
     ],
-    classes: Annotated[
-        Optional[Path],
-        typer.Argument(help="classes.json from `gyrocomp classify` of the same components (parallel pipelines only)."),
-    ] = None,
-    config: Annotated[str, typer.Option("--config", "-c", help="Pipeline TOML or a name in configs/ (pe-lcd-anfis, iceemdan-se-tfpf-nsga2elm, bp, elm, polynomial).")] = "pe-lcd-anfis",
+    config: Annotated[str, typer.Option("--config", "-c", help="Pipeline TOML or a name in configs/ (pe-lcd-anfis, iceemdan-se-tfpf-nsga2elm, bp, elm, polynomial, firmware, greybox).")] = "pe-lcd-anfis",
     out: Annotated[Path, typer.Option("--out", "-o", help="model.json to write.")] = ...,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every learner that draws random numbers.")] = 0,
     workers: Annotated[int, typer.Option("--workers", help="Processes training the axes side by side (direct pipelines); the model does not depend on it.")] = 1,
@@ -55,9 +55,12 @@ def train(
     Parallel pipelines (the papers) learn each classified segment: PE-LCD-ANFIS
     a 16-rule ANFIS on the drift segment and a 4-rule ANFIS on the SG-smoothed
     mixed segment; ICEEMDAN-SE-TFPF + NSGA-II-ELM an NSGA-II-tuned ELM on the
-    feature segment. Direct pipelines (bp, elm, polynomial) learn the recorded
-    rate itself. dT/dt is the slope of a local straight line over [rate]
-    window_s. model.json holds every setting and learned number compensate needs,
+    feature segment. Direct pipelines (bp, elm, polynomial, firmware) learn the
+    recorded rate itself. dT/dt is the slope of a local straight line over [rate]
+    window_s. greybox fits a causal state-space model (element-temperature lag,
+    cubic, heating/cooling dT/dt, play hysteresis, warm-up) on every recording
+    given, each its own run, with only the terms the runs identify. A term a run
+    cannot identify is left out and named in one note line. model.json holds every setting and learned number compensate needs,
     for every axis of --rate-col (gx,gy,gz or a glob: one model per axis, under
     its column's name). A recording with gaps trains on every sample of every
     segment; dT/dt never spans a gap, and a decomposition pipeline
@@ -66,12 +69,14 @@ def train(
     with report_errors(ctx):
         from gyrocomp.commands import from_params, train as stage
 
-        inputs = [components] if classes is None else [components, classes]
         model = stage.to_files(inputs, out, from_params(stage.Options, ctx.params))
     console = console_for(ctx, out)
     for axis, m in model["axes"].items():
         t = m["training"]
-        fits = ", ".join(f"{seg}: {e['learner']['kind']} rmse {e['train_rmse_dps']:.3g} {m['unit']}" for seg, e in m["segments"].items())
+        if m["kind"] == "greybox":
+            fits = greybox_line(m["greybox"]["fitted"])
+        else:
+            fits = ", ".join(f"{seg}: {e['learner']['kind']} rmse {e['train_rmse_dps']:.3g} {m['unit']}" for seg, e in m["segments"].items())
         console.print(
             f"{out} [{axis}]: {m['kind']} trained on {t['n_samples']} samples in {t['n_segments']} segment(s), "
             f"{t['temperature_c']['min']:.1f} to {t['temperature_c']['max']:.1f} degC; {fits}",
@@ -86,8 +91,23 @@ def not_fitted_notes(model: dict) -> list[str]:
     """One line per term a model left out, naming the axes it was left out of (``not_fitted`` of each segment)."""
     axes_of: dict[str, list[str]] = {}
     for axis, m in model["axes"].items():
-        for segment in m["segments"].values():
-            for refusal in segment.get("not_fitted", []):
-                axes_of.setdefault(refusal["reason"], []).append(axis)
+        refusals = m.get("not_fitted", []) + [r for segment in m.get("segments", {}).values() for r in segment.get("not_fitted", [])]
+        for refusal in refusals:
+            axes_of.setdefault(refusal["reason"], []).append(axis)
     return [f"[{', '.join(dict.fromkeys(axes))}] {reason}" for reason, axes in axes_of.items()]
+
+
+def greybox_line(fitted: dict) -> str:
+    """The selected terms of a grey-box model and their parameters, in one line."""
+    spec = fitted["spec_"]
+    parts = []
+    if spec["tau_e_s"]:
+        parts.append(f"thermal_lag tau {spec['tau_e_s']:.4g} s")
+    if spec["rate_form"]:
+        parts.append("temp_rate" + (" heating/cooling apart" if spec["rate_form"] == 2 else ""))
+    if spec["width_c"]:
+        parts.append(f"hysteresis width {spec['width_c']:.3g} degC")
+    if spec["tau_w_s"]:
+        parts.append(f"warmup tau {spec['tau_w_s']:.4g} s")
+    return "greybox: cubic in T_e" + "".join(f" + {p}" for p in parts)
 

@@ -220,7 +220,7 @@ def stream_to_files(
                     streams = {name: CausalCompensation(model, chunk.fs_hz, chunks.name, clamp=clamp) for name, model in pairs.items()}
                     figures = {name: _RunningFigures() for name in pairs}
                 columns = {"time": chunk.time_s, **{name: chunk.axis(name).rate_dps for name in pairs}, "temperature": chunk.temperature_c}
-                results = {name: streams[name](columns[name], columns["temperature"]) for name in pairs}
+                results = {name: streams[name](columns[name], columns["temperature"], chunk.time_s) for name in pairs}
                 for name in pairs:
                     columns[output_name(name, "drift_model")] = results[name][0]
                 for name in pairs:

@@ -107,6 +107,16 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
             axis = str(header.get("axis", "rate"))
             trained = {axis: train_parallel(frame, header, labels, cfg, source=options.config, seed=options.seed, inputs=records)}
             units = {axis: str(header.get("unit", "deg/s"))}
+    elif pipeline.kind == "greybox":  # every input a run of the same gyro
+        from gyrocomp.pipeline.greybox import train_greybox
+
+        runs = []
+        for path in inputs:
+            streams = recordings.read_recordings(path, options.columns, require_temperature=True, min_samples=16, allow_gaps=True)
+            if len(streams) > 1:
+                raise InputError(f"{path}: {len(streams)} streams on their own time bases; select one with --rate-col for a greybox model")
+            runs.append(streams[0])
+        trained, units = train_greybox(runs, cfg, source=options.config, seed=options.seed)
     else:
         if rest:
             raise InputError(f"{options.config}: a direct pipeline ({pipeline.kind}) trains on the recording alone; drop {rest[0]}")

@@ -1,7 +1,7 @@
 """How strong an effect must be before `gyrocomp diagnose` can see it.
 
 An **ideal detector** knows an effect's exact shape and the true noise
-covariance ``Sigma`` of the block means (:mod:`gyrocomp.diagnose.likelihood`)
+covariance ``Sigma`` of the block means (:mod:`gyrocomp.effects.likelihood`)
 and compares the model with the effect to the closest model without it by
 the drop ``T`` of ``-2 log L``. The selection
 (:mod:`gyrocomp.diagnose.select`) keeps an effect of ``k`` parameters when
@@ -43,7 +43,7 @@ import numpy as np
 from scipy import linalg, optimize, stats
 
 from gyrocomp.diagnose.effects import KINDS, STOCHASTIC, effect_columns, n_params_runs, polynomial_columns
-from gyrocomp.diagnose.likelihood import NoiseModel, block_means
+from gyrocomp.effects.likelihood import NoiseModel, block_means
 
 __all__ = [
     "threshold",

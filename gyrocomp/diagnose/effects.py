@@ -2,7 +2,7 @@
 
 Every deterministic effect of the vocabulary (DESIGN.md, "The simulator and
 the sim-to-real gap") enters the model as columns of the design matrix,
-built by its object in the registry :data:`gyrocomp.sim.vocabulary.KINDS`
+built by its object in the registry :data:`gyrocomp.effects.vocabulary.KINDS`
 that the simulator also draws its bias from, so that the diagnosis fits
 exactly the terms the simulator would add:
 
@@ -19,7 +19,7 @@ periodic        sin, cos (2 pi k t / P), k = 1..H           ``period_s`` (grid),
 ==============  ==========================================  ======================  ==========
 
 The stochastic effects (``bias_instability``, ``rate_random_walk``) are
-terms of the noise covariance (:mod:`gyrocomp.diagnose.likelihood`), not
+terms of the noise covariance (:mod:`gyrocomp.effects.likelihood`), not
 columns; ``bias_instability`` is flicker or, where the BIC pays for its
 correlation time, its Markov form (:func:`gyrocomp.diagnose.select.extend`). The per-run offset, for ``periodic`` the phase (every harmonic's) and for ``hysteresis``
 the level before the first excursion beyond the deadband (the branch the part
@@ -35,8 +35,8 @@ import dataclasses
 
 import numpy as np
 
-from gyrocomp.sim.vocabulary import DETERMINISTIC, EFFECTS, KINDS, NEEDS_TEMPERATURE, PER_RUN, STOCHASTIC
-from gyrocomp.sim.vocabulary.thermal_lag import polynomial_columns
+from gyrocomp.effects.vocabulary import DETERMINISTIC, EFFECTS, KINDS, NEEDS_TEMPERATURE, PER_RUN, STOCHASTIC
+from gyrocomp.effects.vocabulary.thermal_lag import polynomial_columns
 
 __all__ = [
     "EFFECTS",
@@ -58,7 +58,7 @@ __all__ = [
 
 def n_params_runs(effect: str, n_runs: int, params=None) -> int:
     """Free parameters `effect` adds at nonlinear parameters `params` when fitted on `n_runs` runs together
-    (:meth:`gyrocomp.sim.vocabulary.Effect.n_params_runs`).
+    (:meth:`gyrocomp.effects.vocabulary.Effect.n_params_runs`).
 
     >>> n_params_runs("periodic", 2), n_params_runs("warmup", 2)
     (5, 2)
@@ -81,7 +81,7 @@ class Run:
     n_per_block : int
         Samples per block of the likelihood.
     rate_smooth_s : float
-        Savitzky-Golay window of dT/dt [s] (:func:`gyrocomp.sim.effects.temperature_rate`):
+        Savitzky-Golay window of dT/dt [s] (:func:`gyrocomp.effects.shapes.temperature_rate`):
         a measured temperature is noisy and quantised.
     gapped : bool
         The samples are whole blocks of segments with gaps between them
@@ -172,7 +172,7 @@ def periodic_block_means(run: Run, period_s, harmonics: int = 1):
     Returns
     -------
     ndarray, shape (n_blocks, 2 harmonics)
-        Columns in the order of :func:`gyrocomp.sim.vocabulary.periodic.harmonic_names`.
+        Columns in the order of :func:`gyrocomp.effects.vocabulary.periodic.harmonic_names`.
     """
     m = run.n_per_block
     h = 1.0 / run.fs_hz

@@ -69,7 +69,7 @@ from scipy import linalg, special, stats
 
 from gyrocomp import allan
 from gyrocomp.allan.ieee952 import FLICKER_AVAR
-from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, markov_block_covariance
+from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, markov_block_covariance
 
 __all__ = ["gap", "barnes_b1", "noise_level", "log_chi2_moment", "effective_dof"]
 

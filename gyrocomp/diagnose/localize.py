@@ -20,8 +20,8 @@ import numpy as np
 from scipy import ndimage, signal
 
 from gyrocomp.decompose import DecomposeSettings, decompose
-from gyrocomp.diagnose.likelihood import NoiseModel, block_means
-from gyrocomp.sim import effects as shapes
+from gyrocomp.effects.likelihood import NoiseModel, block_means
+from gyrocomp.effects import shapes
 
 __all__ = ["regimes", "timescales", "components"]
 

@@ -2,7 +2,7 @@ r"""Stepwise selection of effects by one criterion: BIC on the selection runs.
 
 Every model is the baseline (per-run offset, temperature polynomial, white
 noise) plus a set of effects; it is scored by the block-mean likelihood of
-:mod:`gyrocomp.diagnose.likelihood`, in which deterministic effects are
+:mod:`gyrocomp.effects.likelihood`, in which deterministic effects are
 regressors and ``bias_instability`` / ``rate_random_walk`` are noise terms.
 
 **The criterion.** A model's score is its BIC on the *selection runs* (the
@@ -62,8 +62,8 @@ import numpy as np
 from scipy import linalg, optimize
 
 from gyrocomp.diagnose.effects import DETERMINISTIC, KINDS, PER_RUN, STOCHASTIC, Run, TemperatureScale, design, effect_columns, periodic_block_means
-from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, merge_blocks, profile_deviance
-from gyrocomp.sim.vocabulary.periodic import harmonic_names
+from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, merge_blocks, profile_deviance
+from gyrocomp.effects.vocabulary.periodic import harmonic_names
 
 __all__ = ["Fitted", "Problem", "Search", "fit_baseline", "extend", "holdout_fit", "residual_of", "sample_arw"]
 
@@ -133,7 +133,7 @@ def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
 
     ``bias_instability`` takes the form of lowest BIC: flicker, or its
     Markov form at each correlation time of its grid (one parameter more;
-    :class:`~gyrocomp.diagnose.likelihood.NoiseModel`).
+    :class:`~gyrocomp.effects.likelihood.NoiseModel`).
     """
     stochastic = [e for e in current.order if e not in DETERMINISTIC]
     spec = dict(current.spec)
@@ -167,7 +167,7 @@ def _bias_forms(problem: Problem, noise: NoiseModel, Xb, free) -> list:
     Beside a random walk every likelihood evaluation factorises the whole
     covariance (:meth:`NoiseBasis.whitener`), so the correlation time is
     chosen on the block means merged to ``bias_correlation_search_blocks``
-    (:func:`~gyrocomp.diagnose.likelihood.merge_blocks`; the Markov forms
+    (:func:`~gyrocomp.effects.likelihood.merge_blocks`; the Markov forms
     have one parameter count, so their deviances rank them) and only that
     form is fitted beside flicker on the full blocks.
     """
@@ -494,7 +494,7 @@ def _refit(problem: Problem, baseline: Fitted, order: tuple, spec: dict, noise: 
 
 
 def _n_params(effects, spec: dict, noise: NoiseModel) -> int:
-    """Free parameters of `effects` on one run, each in its fitted form (:meth:`~gyrocomp.sim.vocabulary.Effect.n_params_of`;
+    """Free parameters of `effects` on one run, each in its fitted form (:meth:`~gyrocomp.effects.vocabulary.Effect.n_params_of`;
     ``bias_instability``'s form is in `noise`)."""
     return sum(KINDS[e].n_params_of(_form(e, spec, noise)) for e in effects)
 
@@ -509,7 +509,7 @@ def _form(effect: str, spec: dict, noise: NoiseModel) -> dict:
 def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_problems=()) -> dict:
     """Grid search (then bounded refinement in log scale) of the effect's nonlinear parameter, in its best form.
 
-    An effect with :attr:`~gyrocomp.sim.vocabulary.Effect.forms` takes the
+    An effect with :attr:`~gyrocomp.effects.vocabulary.Effect.forms` takes the
     form of lowest BIC, ``-2 log L + k ln n`` with ``k`` the form's
     parameter count and ``n`` the blocks of the runs, each form at its own
     best nonlinear parameter: a richer form's extra columns earn their
@@ -578,7 +578,7 @@ def _periodic_waveform(parts, periods, settings, length_s, block_s, deviance):
 
     For every ``H`` from 1 to ``periodic_harmonics`` the deviance of a
     Fourier series of ``H`` harmonics is scanned over the periods that may
-    carry ``H`` (:meth:`gyrocomp.sim.vocabulary.periodic._Periodic.max_harmonics`)
+    carry ``H`` (:meth:`gyrocomp.effects.vocabulary.periodic._Periodic.max_harmonics`)
     and its best period refined (harmonic ``k`` moves ``k`` times faster
     with the period than the fundamental, so each ``H`` is refined apart);
     the ``H`` of least ``deviance + 2 H R ln n`` wins (``2 H`` per-run

@@ -118,7 +118,7 @@ from scipy import linalg, optimize, stats
 from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose import two_level
 from gyrocomp.diagnose.gap import effective_dof
-from gyrocomp.diagnose.likelihood import NoiseModel, block_means, fit_noise, merge_blocks, profile_deviance
+from gyrocomp.effects.likelihood import NoiseModel, block_means, fit_noise, merge_blocks, profile_deviance
 
 __all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "column_scores", "threshold_scan", "step_scan", "temperature_bins", "temperature_edges", "level_test", "bartlett", "tone_replication"]
 

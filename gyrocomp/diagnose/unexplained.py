@@ -102,7 +102,7 @@ from scipy import linalg, stats
 
 from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.effects import KINDS, PER_RUN
-from gyrocomp.diagnose.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 from gyrocomp.diagnose import signature
 from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins, temperature_edges
 

@@ -151,13 +151,21 @@ class CausalCompensation:
         self.model = model
         self.name = name
         self.clamp = bool(clamp)
-        self._rate = CausalRate(model.rate, fs_hz)
-        self._seen = _Seen(model)
+        if model.kind == "greybox":  # its own states: element temperature, causal dT/dt, play, time since power-on
+            self._greybox = model.stream(clamp=self.clamp)
+            self._seen = _Seen(model, ("temperature",))
+        else:
+            self._rate = CausalRate(model.rate, fs_hz)
+            self._seen = _Seen(model)
 
-    def __call__(self, rate, temperature) -> tuple[np.ndarray, np.ndarray]:
-        """``drift_model`` and ``compensated`` [deg/s] of the chunk."""
+    def __call__(self, rate, temperature, time_s=None) -> tuple[np.ndarray, np.ndarray]:
+        """``drift_model`` and ``compensated`` [deg/s] of the chunk (a grey-box model needs its `time_s`)."""
         temperature = np.asarray(temperature, dtype=float)
         rate = np.asarray(rate, dtype=float)
+        if self.model.kind == "greybox":
+            self._seen.add(temperature[:, None])
+            drift = self._greybox(time_s, temperature)
+            return drift, rate - drift
         X = np.array([temperature, self._rate(temperature)]).T  # Fortran order: each column contiguous
         self._seen.add(X)
         drift = np.sum(list(self.model.predict(X, clamp=self.clamp).values()), axis=0)
@@ -205,8 +213,14 @@ def load_models(obj: dict, name: str = "model.json") -> dict:
     return {axis: _drift_model(one, name if axis is None else f"{name} axis {axis}") for axis, one in axis_models(obj, name).items()}
 
 
-def _drift_model(obj: dict, name: str) -> DriftModel:
+def _drift_model(obj: dict, name: str):
+    """A :class:`DriftModel`, or a :class:`~gyrocomp.pipeline.greybox.GreyBoxModel` for ``kind = "greybox"``."""
     from gyrocomp import models
+
+    if isinstance(obj, dict) and obj.get("kind") == "greybox":
+        from gyrocomp.pipeline.greybox import load_greybox
+
+        return load_greybox(obj, name)
 
     try:
         rate_table = {k: obj["rate_estimator"][k] for k in ("method", "window_s", "polyorder")}
@@ -332,6 +346,30 @@ def compensate(
         raise InputError(f"{recording.name}: no `temperature` column; the drift model needs it")
     temperature = data["temperature"].to_numpy(dtype=float)
     rate = data["rate"].to_numpy(dtype=float)
+    if model.kind == "greybox":  # causal by construction: full mode is the same model
+        clamp = True if clamp is None else clamp
+        drift_model = model.drift(data["time"].to_numpy(dtype=float), temperature, bounds=bounds, clamp=clamp)
+        summary = {"mode": mode, "kind": model.kind, "parallel": False, "clamp": bool(clamp), "bridge_gaps": model.estimator.bridge_gaps}
+        summary["ranges"], summary["warnings"] = _ranges(recording.name, _Seen(model, ("temperature",)).add(temperature[:, None]), model, clamp)
+        compensated = rate - drift_model
+    else:
+        drift_model, compensated, summary = _compensate_static(recording, model, mode, clamp, seed, workers, callback, bounds, temperature, rate)
+    import pandas as pd  # here: the causal stream does without it (half a second of import)
+
+    frame = pd.DataFrame(
+        {
+            "time": data["time"].to_numpy(dtype=float),
+            "rate": rate,
+            "temperature": temperature,
+            "drift_model": drift_model,
+            "compensated": compensated,
+        }
+    )
+    return frame, summary
+
+
+def _compensate_static(recording, model: DriftModel, mode, clamp, seed, workers, callback, bounds, temperature, rate):
+    """``drift_model``, ``compensated`` and the summary of a static map of (T, dT/dt) (:func:`compensate`)."""
     X = model.inputs(temperature, recording.fs_hz, causal=(mode == "causal"), bounds=bounds)
     if clamp is None:
         clamp = True if mode == "causal" else model.clip_inputs
@@ -351,18 +389,7 @@ def compensate(
             summary["segment_classes"] = classes
     else:
         compensated = rate - drift_model
-    import pandas as pd  # here: the causal stream does without it (half a second of import)
-
-    frame = pd.DataFrame(
-        {
-            "time": data["time"].to_numpy(dtype=float),
-            "rate": rate,
-            "temperature": temperature,
-            "drift_model": drift_model,
-            "compensated": compensated,
-        }
-    )
-    return frame, summary
+    return drift_model, compensated, summary
 
 
 def _parallel_segments(recording, model: DriftModel, seed, workers, callback, bounds):
@@ -385,11 +412,12 @@ def _parallel_segments(recording, model: DriftModel, seed, workers, callback, bo
 class _Seen:
     """Running minimum, maximum and count outside the training range of each input [T, dT/dt]."""
 
-    def __init__(self, model: DriftModel):
-        self.ranges = (model.temperature_range_c, model.rate_range_c_per_s)
+    def __init__(self, model: DriftModel, inputs=("temperature", "dT/dt")):
+        self.inputs = inputs
+        self.ranges = (model.temperature_range_c, *((model.rate_range_c_per_s,) if len(inputs) > 1 else ()))
         self.rows = 0
-        self.low, self.high = [math.inf, math.inf], [-math.inf, -math.inf]
-        self.outside = [0, 0]
+        self.low, self.high = [math.inf] * len(inputs), [-math.inf] * len(inputs)
+        self.outside = [0] * len(inputs)
 
     def add(self, X: np.ndarray) -> "_Seen":
         self.rows += len(X)
@@ -405,9 +433,9 @@ def _ranges(name: str, seen: _Seen, model: DriftModel, clamp: bool) -> tuple[dic
     """Each input's range met against its training range; one warning per input that leaves it."""
     ranges, messages = {}, []
     inputs = (
-        ("temperature_c", "temperature", "degC", model.temperature_range_c),
-        ("temperature_rate_c_per_s", "dT/dt", "degC/s", model.rate_range_c_per_s),
-    )
+        ("temperature_c", "temperature", "degC", seen.ranges[0]),
+        ("temperature_rate_c_per_s", "dT/dt", "degC/s", seen.ranges[-1]),
+    )[: len(seen.inputs)]
     for column, (key, label, unit, (lo, hi)) in enumerate(inputs):
         x_lo, x_hi = seen.low[column], seen.high[column]
         tolerance = 1e-9 * max(hi - lo, abs(lo), abs(hi))  # the training run itself, to rounding

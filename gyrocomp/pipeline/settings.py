@@ -45,7 +45,7 @@ LEARNERS = {
 }
 """Learner names usable in ``[model.<segment>] learner = ...`` and their classes in :mod:`gyrocomp.models`."""
 
-PIPELINE_KINDS = ("pe-lcd-anfis", "iceemdan-se-tfpf-nsga2elm", "polynomial", "firmware", "bp", "elm", "anfis", "nsga2elm")
+PIPELINE_KINDS = ("pe-lcd-anfis", "iceemdan-se-tfpf-nsga2elm", "polynomial", "firmware", "greybox", "bp", "elm", "anfis", "nsga2elm")
 """Pipeline labels ``[pipeline] kind`` may take: the two papers' pipelines and the direct comparators."""
 
 SEGMENTS = ("drift", "mixed")

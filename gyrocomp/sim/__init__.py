@@ -7,16 +7,13 @@ Public API
     -> ``(frame, truth)``.
 :func:`profile_from_recording`
     Drive the simulator by a recording's measured temperature.
-:mod:`gyrocomp.sim.effects`
-    The deterministic bias shapes (``thermal_lag``, ``temp_rate``,
-    ``hysteresis``, ``warmup``, ``rate_ramp``, ``periodic``).
-:mod:`gyrocomp.sim.noise`
-    White, flicker and random-walk rate noise from IEEE 952 ``N``, ``B``, ``K``.
+:mod:`gyrocomp.effects`
+    The effect shapes and vocabulary the simulator shares with the diagnosis
+    and the grey-box model.
 :mod:`gyrocomp.sim.model`
     Settings dataclasses and :func:`load_sim_config`.
 """
 
-from gyrocomp.sim import effects, noise
 from gyrocomp.sim.model import (
     EFFECTS,
     GyroSettings,
@@ -37,9 +34,7 @@ __all__ = [
     "ReferenceSettings",
     "RunSettings",
     "SimConfig",
-    "effects",
     "load_sim_config",
-    "noise",
     "profile_from_recording",
     "run",
     "simulate",

@@ -20,16 +20,17 @@ from pathlib import Path
 
 from gyrocomp.config import CONFIG_DIR, apply_overrides, bind, check_seed, load_config
 from gyrocomp.errors import InputError
-from gyrocomp.sim.profile import ProfileSettings, unit_field
-from gyrocomp.sim.vocabulary import EFFECTS, KINDS
-from gyrocomp.sim.vocabulary.bias_instability import BiasInstability
-from gyrocomp.sim.vocabulary.hysteresis import Hysteresis
-from gyrocomp.sim.vocabulary.periodic import Periodic
-from gyrocomp.sim.vocabulary.rate_ramp import RateRamp
-from gyrocomp.sim.vocabulary.rate_random_walk import RateRandomWalk
-from gyrocomp.sim.vocabulary.temp_rate import TempRate
-from gyrocomp.sim.vocabulary.thermal_lag import ThermalLag
-from gyrocomp.sim.vocabulary.warmup import Warmup
+from gyrocomp.effects._fields import unit_field
+from gyrocomp.sim.profile import ProfileSettings
+from gyrocomp.effects.vocabulary import EFFECTS, KINDS
+from gyrocomp.effects.vocabulary.bias_instability import BiasInstability
+from gyrocomp.effects.vocabulary.hysteresis import Hysteresis
+from gyrocomp.effects.vocabulary.periodic import Periodic
+from gyrocomp.effects.vocabulary.rate_ramp import RateRamp
+from gyrocomp.effects.vocabulary.rate_random_walk import RateRandomWalk
+from gyrocomp.effects.vocabulary.temp_rate import TempRate
+from gyrocomp.effects.vocabulary.thermal_lag import ThermalLag
+from gyrocomp.effects.vocabulary.warmup import Warmup
 
 __all__ = [
     "EFFECTS",
@@ -59,7 +60,7 @@ class _Baseline:
     each effect table adds one term of the vocabulary. Scale factor
     ``(1 + s_0 + s_1 (T - T_ref))`` multiplies an optional reference rate,
     and the output is quantised to `resolution_dps`. :class:`GyroSettings`
-    adds one table per effect of :data:`gyrocomp.sim.vocabulary.KINDS`.
+    adds one table per effect of :data:`gyrocomp.effects.vocabulary.KINDS`.
     """
 
     name: str = "dual-mass-default"

@@ -22,14 +22,10 @@ import dataclasses
 import numpy as np
 
 from gyrocomp.errors import InputError
-from gyrocomp.sim.effects import element_temperature
+from gyrocomp.effects._fields import unit_field
+from gyrocomp.effects.shapes import element_temperature
 
 __all__ = ["ProfileSettings", "Profile", "setpoint", "profile_duration_s", "temperature_profile", "measure", "profile_from_recording"]
-
-
-def unit_field(default, unit):
-    """A dataclass field whose unit :func:`gyrocomp.sim.model.units_of` reports."""
-    return dataclasses.field(default=default, metadata={"unit": unit})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -143,7 +139,7 @@ def temperature_profile(settings: ProfileSettings, time_s, rng: np.random.Genera
     -------
     Profile
         ``housing_c`` is the set-point through the first-order chamber
-        response (:func:`~gyrocomp.sim.effects.element_temperature` with
+        response (:func:`~gyrocomp.effects.shapes.element_temperature` with
         `chamber_tau_s`); ``measured_c`` is :func:`measure` of it.
     """
     time_s = np.asarray(time_s, dtype=float)

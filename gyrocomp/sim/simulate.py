@@ -24,10 +24,11 @@ import pandas as pd
 
 from gyrocomp.config import settings_dict
 from gyrocomp.errors import InputError
-from gyrocomp.sim import effects, noise
+from gyrocomp.effects import shapes as effects
+from gyrocomp.effects import noise
 from gyrocomp.sim.model import GyroSettings, ReferenceSettings, SimConfig, units_of
 from gyrocomp.sim.profile import Profile, ProfileSettings, profile_duration_s, temperature_profile
-from gyrocomp.sim.vocabulary import DETERMINISTIC, EFFECTS, KINDS, STOCHASTIC
+from gyrocomp.effects.vocabulary import DETERMINISTIC, EFFECTS, KINDS, STOCHASTIC
 
 __all__ = ["simulate", "run", "reference_rate", "RECORDING_SCHEMA"]
 

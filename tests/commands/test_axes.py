@@ -308,7 +308,7 @@ def test_batch_passes_the_axes_and_reports_each(log3, tmp_path):
 
 def _two_axes(path, seed):
     """5400 s at 1 Hz: `g1` the baseline (offset + linear in T + ARW 1 deg/sqrt(h)), `g2` the same plus a 1000 s sinusoid."""
-    from gyrocomp.sim import noise as sim_noise
+    from gyrocomp.effects import noise as sim_noise
 
     rng = np.random.default_rng(seed)
     t = np.arange(5400.0)

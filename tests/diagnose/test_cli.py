@@ -7,7 +7,7 @@ import pandas as pd
 from typer.testing import CliRunner
 
 from gyrocomp.cli import app
-from gyrocomp.sim import noise as sim_noise
+from gyrocomp.effects import noise as sim_noise
 
 runner = CliRunner()
 

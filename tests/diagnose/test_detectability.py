@@ -22,9 +22,9 @@ from gyrocomp.diagnose.detectability import (
     noise_ratios,
     threshold,
 )
-from gyrocomp.diagnose.likelihood import NoiseModel, block_means
+from gyrocomp.effects.likelihood import NoiseModel, block_means
 from gyrocomp.recordings import recording_from_frame
-from gyrocomp.sim import effects as shapes
+from gyrocomp.effects import shapes
 
 FS = 1.0
 N = 2 * 3600

@@ -5,8 +5,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from gyrocomp.diagnose.gap import barnes_b1, gap
-from gyrocomp.diagnose.likelihood import NoiseModel
-from gyrocomp.sim import noise as sim_noise
+from gyrocomp.effects.likelihood import NoiseModel
+from gyrocomp.effects import noise as sim_noise
 
 
 def test_barnes_b1_published_values():

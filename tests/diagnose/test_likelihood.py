@@ -5,8 +5,8 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy import stats
 
-from gyrocomp.diagnose.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
-from gyrocomp.sim import noise as sim_noise
+from gyrocomp.effects.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+from gyrocomp.effects import noise as sim_noise
 
 
 def _avar_of_blocks(cov, lag_blocks):

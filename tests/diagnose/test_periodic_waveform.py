@@ -6,7 +6,7 @@ import pytest
 
 from gyrocomp.diagnose import DiagnoseSettings, problems
 from gyrocomp.diagnose.effects import KINDS
-from gyrocomp.diagnose.likelihood import block_means
+from gyrocomp.effects.likelihood import block_means
 from gyrocomp.diagnose.select import Search, extend, fit_baseline
 from gyrocomp.recordings import recording_from_frame
 

@@ -21,7 +21,7 @@ from gyrocomp.diagnose import DiagnoseSettings, problems
 from gyrocomp.diagnose.effects import EFFECTS
 from gyrocomp.diagnose.select import Search, extend, fit_baseline
 from gyrocomp.recordings import recording_from_frame
-from gyrocomp.sim.effects import first_excursion, hysteresis_play
+from gyrocomp.effects.shapes import first_excursion, hysteresis_play
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from independent_gen import gauss_markov, kasdin_flicker, play_operator, relay_sum  # noqa: E402  (the independent generator's operators: no gyrocomp code)

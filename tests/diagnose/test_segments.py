@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from gyrocomp.diagnose import diagnose, problems
-from gyrocomp.diagnose.likelihood import NoiseBasis
+from gyrocomp.effects.likelihood import NoiseBasis
 from gyrocomp.recordings import ColumnSpec, read_recording, recording_from_frame
 
 

@@ -107,7 +107,7 @@ def test_static_recording_is_diagnosed_on_its_stochastic_part():
     rng = np.random.default_rng(1)
     n = 2 * 3600
     t = np.arange(n, dtype=float)
-    from gyrocomp.sim import noise as sim_noise
+    from gyrocomp.effects import noise as sim_noise
 
     recs = []
     for k in range(2):

@@ -1,7 +1,7 @@
 """The signature of a noise term (gyrocomp.diagnose.signature) on constructed cases.
 
 Recordings are built here from numpy draws (white noise, a random walk, a
-step, a temperature bump, a ramp) and from :func:`gyrocomp.sim.noise.flicker`
+step, a temperature bump, a ramp) and from :func:`gyrocomp.effects.noise.flicker`
 (a synthesis by spectral shaping, independent of the likelihood's
 Gauss-Markov covariance); the noise term is fitted by
 :func:`gyrocomp.diagnose.select.extend` as the diagnosis would.
@@ -18,9 +18,9 @@ from gyrocomp.diagnose import DiagnoseSettings
 from gyrocomp.diagnose import signature as sg
 from gyrocomp.diagnose import unexplained as ux
 from gyrocomp.diagnose.effects import Run, TemperatureScale
-from gyrocomp.diagnose.likelihood import NoiseBasis
+from gyrocomp.effects.likelihood import NoiseBasis
 from gyrocomp.diagnose.select import Problem, Search, extend, fit_baseline
-from gyrocomp.sim.noise import flicker
+from gyrocomp.effects.noise import flicker
 
 N = 0.005  # white rate noise [deg/s/sqrt(Hz)] (0.3 deg/sqrt(h))
 K = 1.0 / 3600.0 / 60.0  # rate random walk [deg/s/sqrt(s)] (1 deg/h/sqrt(h))

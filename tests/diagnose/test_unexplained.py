@@ -290,7 +290,7 @@ def test_a_hysteresis_is_judged_beside_each_description_of_the_residual():
 def test_a_hysteresis_beside_a_step_in_time_stays():
     # a true relay of 7.2 deg/h (deadband 4 degC) and a 3.6 deg/h step at 40 % of the run: the step is unexplained,
     # the relay earns its place beside it and beside any other description of the residual
-    from gyrocomp.sim.vocabulary.hysteresis import OPERATORS
+    from gyrocomp.effects.vocabulary.hysteresis import OPERATORS
 
     model, v = _confirmed(lambda t: 0.002 * OPERATORS["relay"](t, _temperature(t), 4.0) + 0.001 * (t > 0.4 * t[-1]), 9, ("hysteresis",))
     assert model.order == ("hysteresis",)
@@ -344,7 +344,7 @@ def _flicker_pair(seed, noise, settings=DiagnoseSettings()):
 def test_a_flicker_the_runs_disagree_on_is_unlisted():
     # flicker of 7 deg/h on the fit run and 29 deg/h on the holdout: it gains its place beside the drift
     # found on the fit run in its place, but its own statistics (the level agreement) refuse it there too
-    from gyrocomp.sim.noise import flicker
+    from gyrocomp.effects.noise import flicker
 
     model, v = _flicker_pair(1, [lambda rng, n, b=b: flicker(n, 1.0, b * 3600.0, rng) for b in (0.002, 0.008)])
     assert model.order == ()

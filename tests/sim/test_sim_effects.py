@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from gyrocomp.errors import InputError
-from gyrocomp.sim import effects
+from gyrocomp.effects import shapes as effects
 
 
 def test_thermal_lag_decays_with_its_time_constant_after_a_step():

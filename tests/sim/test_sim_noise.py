@@ -9,7 +9,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from gyrocomp.errors import InputError
-from gyrocomp.sim import noise
+from gyrocomp.effects import noise
 
 FS = 10.0
 N_SAMPLES = 2**17

@@ -201,7 +201,7 @@ def test_a_negative_correlation_time_is_refused():
 def test_the_markov_bias_has_the_allan_peak_of_its_b():
     """gyro.bias_instability.correlation_s > 0 draws a Gauss-Markov bias whose Allan deviation peaks near 0.664 B at 1.89 T_c."""
     from gyrocomp import allan
-    from gyrocomp.sim import noise as sim_noise
+    from gyrocomp.effects import noise as sim_noise
 
     x = sim_noise.markov(400_000, 1.0, 36.0, 100.0, np.random.default_rng(3))
     tau, adev, _ = allan.oadev(x, 1.0, "octave")

@@ -6,9 +6,9 @@ import dataclasses
 
 import numpy as np
 
-from gyrocomp.sim.vocabulary._base import Effect
-from gyrocomp.sim import effects as shapes
-from gyrocomp.sim.profile import unit_field
+from gyrocomp.effects.vocabulary._base import Effect
+from gyrocomp.effects import shapes
+from gyrocomp.effects._fields import unit_field
 
 
 @dataclasses.dataclass(frozen=True)

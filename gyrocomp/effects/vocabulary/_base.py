@@ -1,4 +1,4 @@
-"""The interface every effect of the vocabulary implements (:data:`gyrocomp.sim.vocabulary.KINDS`)."""
+"""The interface every effect of the vocabulary implements (:data:`gyrocomp.effects.vocabulary.KINDS`)."""
 
 from __future__ import annotations
 
@@ -88,7 +88,7 @@ class Effect(abc.ABC):
     def n_params_runs(self, n_runs: int, params=None) -> int:
         """Free parameters when fitted on `n_runs` runs together: the per-run columns count once per run.
 
-        >>> from gyrocomp.sim.vocabulary import KINDS
+        >>> from gyrocomp.effects.vocabulary import KINDS
         >>> KINDS["periodic"].n_params_runs(2), KINDS["warmup"].n_params_runs(2), KINDS["periodic"].n_params_runs(2, {"harmonics": 3})
         (5, 2, 13)
         """
@@ -150,7 +150,7 @@ class Effect(abc.ABC):
             Fitted design coefficients by column name.
         params : dict
             The fitted nonlinear parameter.
-        noise : gyrocomp.diagnose.likelihood.NoiseModel
+        noise : gyrocomp.effects.likelihood.NoiseModel
         """
 
     def amplitude(self, value: float) -> dict:

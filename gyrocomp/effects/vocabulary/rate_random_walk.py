@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 
-from gyrocomp.sim.vocabulary._base import Effect
-from gyrocomp.sim import noise as sim_noise
-from gyrocomp.sim.profile import unit_field
+from gyrocomp.effects.vocabulary._base import Effect
+from gyrocomp.effects import noise as sim_noise
+from gyrocomp.effects._fields import unit_field
 
 
 @dataclasses.dataclass(frozen=True)
@@ -18,7 +18,7 @@ class RateRandomWalk:
 
 
 class _RateRandomWalk(Effect):
-    """A covariance term of the likelihood (:mod:`gyrocomp.diagnose.likelihood`), ``K`` free."""
+    """A covariance term of the likelihood (:mod:`gyrocomp.effects.likelihood`), ``K`` free."""
 
     name = "rate_random_walk"
     settings = RateRandomWalk

@@ -114,7 +114,7 @@ def flicker(n, fs_hz, bias_instability, rng):
 def markov(n, fs_hz, bias_instability, correlation_s, rng):
     """Exponentially correlated (first-order Gauss-Markov) bias of bias instability `bias_instability`.
 
-    The Markov form of the bias instability (:class:`gyrocomp.diagnose.likelihood.NoiseModel`):
+    The Markov form of the bias instability (:class:`gyrocomp.effects.likelihood.NoiseModel`):
     one process of correlation time ``T_c`` whose Allan deviation peaks at
     ``0.664 B``, the flicker floor of the same ``B`` (IEEE Std 952 Annex C:
     stationary variance ``(2 ln 2 / pi) B^2 / MARKOV_PEAK_AVAR``). Drawn

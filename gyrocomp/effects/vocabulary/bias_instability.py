@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 
 from gyrocomp.errors import InputError
-from gyrocomp.sim.vocabulary._base import Effect
-from gyrocomp.sim import noise as sim_noise
-from gyrocomp.sim.profile import unit_field
+from gyrocomp.effects.vocabulary._base import Effect
+from gyrocomp.effects import noise as sim_noise
+from gyrocomp.effects._fields import unit_field
 
 
 @dataclasses.dataclass(frozen=True)
@@ -30,7 +30,7 @@ class BiasInstability:
 
 
 class _BiasInstability(Effect):
-    """A covariance term of the likelihood (:mod:`gyrocomp.diagnose.likelihood`), ``B`` free.
+    """A covariance term of the likelihood (:mod:`gyrocomp.effects.likelihood`), ``B`` free.
 
     Two forms: flicker (``B`` alone) and Markov (``B`` and the correlation
     time ``correlation_s`` on the ``bias_correlation_s`` grid, one parameter

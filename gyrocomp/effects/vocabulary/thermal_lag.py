@@ -6,15 +6,15 @@ import dataclasses
 
 import numpy as np
 
-from gyrocomp.sim.vocabulary._base import Effect
-from gyrocomp.sim import effects as shapes
-from gyrocomp.sim.profile import unit_field
+from gyrocomp.effects.vocabulary._base import Effect
+from gyrocomp.effects import shapes
+from gyrocomp.effects._fields import unit_field
 
 
 @dataclasses.dataclass(frozen=True)
 class ThermalLag:
     """``thermal_lag``: the bias polynomial is evaluated at the element temperature,
-    a first-order lag of the housing temperature (:func:`~gyrocomp.sim.effects.element_temperature`)."""
+    a first-order lag of the housing temperature (:func:`~gyrocomp.effects.shapes.element_temperature`)."""
 
     enabled: bool = True
     tau_s: float = unit_field(400.0, "s")

@@ -432,7 +432,7 @@ def _flicker_block_covariance(lag, block_s, per_decade=3):
 
     Time constants run three per decade from ``T_b / 10`` to ``L / (2 pi)``:
     the 1/f spectrum is modelled from the recording's lowest frequency
-    ``1 / L`` up (as :func:`gyrocomp.sim.noise.flicker` synthesises it), so
+    ``1 / L`` up (as :func:`gyrocomp.effects.noise.flicker` synthesises it), so
     that flicker does not borrow the random walk's power below ``1 / L``
     (``L`` the span the blocks cover). Each process's block-mean covariance
     is :func:`markov_block_covariance`.

@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 
 from gyrocomp.errors import InputError
-from gyrocomp.sim.vocabulary._base import Effect
-from gyrocomp.sim import effects as shapes
-from gyrocomp.sim.profile import unit_field
+from gyrocomp.effects.vocabulary._base import Effect
+from gyrocomp.effects import shapes
+from gyrocomp.effects._fields import unit_field
 
 
 OPERATORS = {"relay": shapes.hysteresis_branch, "play": shapes.hysteresis_play}
@@ -20,9 +20,9 @@ OPERATORS = {"relay": shapes.hysteresis_branch, "play": shapes.hysteresis_play}
 class Hysteresis:
     """``hysteresis``: bias ``A`` times a hysteresis operator of width ``deadband_c``:
     ``relay``, ``+A`` on the heating branch and ``-A`` on the cooling one
-    (:func:`~gyrocomp.sim.effects.hysteresis_branch`), or ``play``, moving
+    (:func:`~gyrocomp.effects.shapes.hysteresis_branch`), or ``play``, moving
     linearly between them over ``deadband_c`` after each reversal
-    (:func:`~gyrocomp.sim.effects.hysteresis_play`)."""
+    (:func:`~gyrocomp.effects.shapes.hysteresis_play`)."""
 
     enabled: bool = False
     amplitude_dps: float = unit_field(0.01, "deg/s")
@@ -46,7 +46,7 @@ class _Hysteresis(Effect):
 
     The branch the part was left in before power-on is not in the recording:
     until the temperature first moves beyond the play
-    (:func:`~gyrocomp.sim.effects.first_excursion`) the bias sits on an
+    (:func:`~gyrocomp.effects.shapes.first_excursion`) the bias sits on an
     unknown branch (or, for a spread of widths, between the branches).
     The indicator of that first part is re-estimated on every run, as
     the offset is.

@@ -3,7 +3,7 @@
 DESIGN.md ("The simulator and the sim-to-real gap") names eight effects
 that the baseline gyro model (per-run offset + polynomial in temperature +
 white noise) leaves out. Each lives in one module of this package as an
-:class:`~gyrocomp.sim.vocabulary._base.Effect` object that holds everything the
+:class:`~gyrocomp.effects.vocabulary._base.Effect` object that holds everything the
 rest of the code needs to know about it:
 
 * its ``[gyro.<name>]`` settings table (the simulator's parameters, each
@@ -43,7 +43,7 @@ rate_random_walk    (noise term)        --                         no
 
 from __future__ import annotations
 
-from gyrocomp.sim.vocabulary import (
+from gyrocomp.effects.vocabulary import (
     bias_instability,
     hysteresis,
     periodic,
@@ -53,7 +53,7 @@ from gyrocomp.sim.vocabulary import (
     thermal_lag,
     warmup,
 )
-from gyrocomp.sim.vocabulary._base import Columns, Effect
+from gyrocomp.effects.vocabulary._base import Columns, Effect
 
 __all__ = ["Effect", "KINDS", "EFFECTS", "DETERMINISTIC", "STOCHASTIC", "NEEDS_TEMPERATURE", "PER_RUN"]
 

@@ -1,0 +1,241 @@
+"""The grey-box drift model (issue 34): recovery, identifiability, causal streaming, gaps, JSON.
+
+Recordings come from :func:`_gyro`, written here with plain NumPy loops (an
+element lag by exponential Euler steps, dT/dt by central differences, the
+play by its definition), not from gyrocomp's simulator or shapes.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from gyrocomp.cli import app
+from gyrocomp.effects import shapes
+from gyrocomp.effects._stateful import advance, new_state
+from gyrocomp.errors import InputError
+from gyrocomp.models.greybox import GreyBoxDrift, TrainingRun
+
+
+def _chamber(t, knots_t, knots_c, tau_s=300.0):
+    """A piecewise-linear set-point through a first-order chamber (Euler, exact per step)."""
+    T = np.interp(t, knots_t, knots_c)
+    out = np.empty_like(T)
+    out[0] = T[0]
+    a = np.exp(-(t[1] - t[0]) / tau_s)
+    for i in range(1, T.size):
+        out[i] = a * out[i - 1] + (1 - a) * T[i]
+    return out
+
+
+CYCLE = ([0, 1800, 5400, 7200, 12600, 14400, 18000, 21600], [20, 20, 60, 60, -10, -10, 40, 40])
+STEPS = ([0, 1200, 3000, 6000, 8400, 11000, 14000, 21600], [25, 25, -5, -5, 50, 50, 10, 10])
+TRUTH = {"tau_e": 400.0, "rate": 1.5, "asym": 0.5, "play": 0.01, "width": 4.0, "warm": 0.03, "tau_w": 900.0}
+
+
+def _gyro(t, T, seed, *, tau_e=400.0, rate=1.5, asym=0.5, play=0.01, width=4.0, warm=0.03, tau_w=900.0, rrw=2e-6):
+    rng = np.random.default_rng(seed)
+    Te = np.empty_like(T)
+    Te[0] = T[0]
+    for i in range(1, T.size):
+        Te[i] = Te[i - 1] + (T[i] - Te[i - 1]) * (1 - np.exp(-(t[i] - t[i - 1]) / tau_e)) if tau_e else T[i]
+    d = Te - 25.0
+    bias = 0.05 + 2e-3 * d - 3e-5 * d**2 + 4e-7 * d**3
+    r = np.gradient(T, t)
+    bias += rate * r + asym * np.abs(r)
+    p, out = T[0], np.empty_like(T)
+    for i in range(T.size):
+        p = min(max(p, T[i] - width / 2), T[i] + width / 2)
+        out[i] = (T[i] - p) / (width / 2)
+    bias += play * out + warm * np.exp(-(t - t[0]) / tau_w)
+    noise = 0.003 * rng.normal(size=t.size) + np.cumsum(rrw * rng.normal(size=t.size))
+    return bias + noise, bias
+
+
+def _run(t, T, y, name="run", power_on=True):
+    return TrainingRun(t, T, y, [slice(0, t.size)], float(t[0]) if power_on else None, name)
+
+
+def _block_std_deg_h(x, block=100):
+    k = x.size // block
+    means = x[: k * block].reshape(k, block).mean(axis=1)
+    return float(np.std(means - means.mean()) * 3600)
+
+
+@pytest.fixture(scope="module")
+def cycle_model():
+    t = np.arange(0, 21600.0)
+    T = _chamber(t, *CYCLE)
+    y, _ = _gyro(t, T, 1)
+    return GreyBoxDrift(grid_points=12).fit([_run(t, T, y, "cycle")])
+
+
+ALONE = {  # each term by itself on the cycle run: its parameters, and the truth's
+    "thermal_lag": (dict(rate=0.0, asym=0.0, play=0.0, warm=0.0), {"spec:tau_e_s": 400.0}),
+    "temp_rate": (dict(tau_e=0.0, play=0.0, warm=0.0), {"coef:rate": 1.5, "coef:rate_abs": 0.5}),
+    "hysteresis": (dict(tau_e=0.0, rate=0.0, asym=0.0, warm=0.0), {"spec:width_c": 4.0, "coef:play": 0.01}),
+    "warmup": (dict(tau_e=0.0, rate=0.0, asym=0.0, play=0.0), {"spec:tau_w_s": 900.0, "coef:warmup": 0.03}),
+}
+
+
+@pytest.mark.parametrize("term", list(ALONE))
+def test_each_term_alone_is_identified_and_recovered_within_10_percent(term):
+    t = np.arange(0, 21600.0)
+    T = _chamber(t, *CYCLE)
+    zeroed, truth = ALONE[term]
+    y, _ = _gyro(t, T, 1, **zeroed)
+    m = GreyBoxDrift(grid_points=12, terms=(term,)).fit([_run(t, T, y, "cycle")])
+    assert [s["term"] for s in m.selection_][:1] == [term] and m.not_fitted_ == []
+    for key, value in truth.items():
+        where, name = key.split(":")
+        assert (m.spec_ if where == "spec" else m.coef_)[name] == pytest.approx(value, rel=0.1), key
+
+
+def test_all_terms_together_are_selected_and_recovered(cycle_model):
+    """Within 10 %, but the warm-up's time constant within 20 %: the causal dT/dt (a 30 s filter) and the
+    generator's central differences differ at the ramps' corners, and that misfit, read as slow noise, widens
+    the warm-up's spread (775 and 868-937 s on two seeds; 894-906 s alone, above)."""
+    m = cycle_model
+    assert sorted(s["term"] for s in m.selection_) == sorted(["thermal_lag", "temp_rate", "hysteresis", "warmup"])
+    assert m.spec_["rate_form"] == 2 and m.not_fitted_ == []
+    assert m.spec_["tau_e_s"] == pytest.approx(TRUTH["tau_e"], rel=0.1)
+    assert m.spec_["width_c"] == pytest.approx(TRUTH["width"], rel=0.1)
+    assert m.spec_["tau_w_s"] == pytest.approx(TRUTH["tau_w"], rel=0.2)
+    for name, key in (("rate", "rate"), ("rate_abs", "asym"), ("play", "play"), ("warmup", "warm")):
+        assert m.coef_[name] == pytest.approx(TRUTH[key], rel=0.1), name
+    assert m.coef_about_reference_[1] == pytest.approx(2e-3, rel=0.1)  # the cubic about T_ref = 25 degC
+
+
+def test_held_out_profile_is_compensated_far_better_than_by_the_cubic(cycle_model):
+    t = np.arange(0, 21600.0)
+    T = _chamber(t, *STEPS)
+    y, bias = _gyro(t, T, 2)
+    greybox = _block_std_deg_h(bias - cycle_model.predict(t, T))
+    train_T = _chamber(t, *CYCLE)
+    train_y, _ = _gyro(t, train_T, 1)
+    A = lambda T: np.column_stack([np.ones_like(T), T - 25, (T - 25) ** 2, (T - 25) ** 3])
+    cubic = _block_std_deg_h(bias - A(T) @ np.linalg.lstsq(A(train_T), train_y, rcond=None)[0])
+    assert greybox < 5.0 and cubic > 5 * greybox, (greybox, cubic)
+
+
+def test_effect_free_runs_select_nothing_and_match_the_cubic():
+    t = np.arange(0, 21600.0)
+    T1, T2 = _chamber(t, *CYCLE), _chamber(t, *STEPS)
+    free = dict(tau_e=0.0, rate=0.0, asym=0.0, play=0.0, warm=0.0, rrw=2e-5)
+    (y1, _), (y2, _) = _gyro(t, T1, 3, **free), _gyro(t, T2, 103, **free)
+    m = GreyBoxDrift(grid_points=12).fit([_run(t, T1, y1)])
+    assert m.selection_ == []
+    A = lambda T: np.column_stack([np.ones_like(T), T - 25, (T - 25) ** 2, (T - 25) ** 3])
+    cubic = _block_std_deg_h(y2 - A(T2) @ np.linalg.lstsq(A(T1), y1, rcond=None)[0])
+    assert _block_std_deg_h(y2 - m.predict(t, T2)) <= 1.1 * cubic
+
+
+def _warmup_run(seed=0, tau=900.0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 3 * 3600.0)
+    T = 55 - 50 * np.exp(-t / tau)
+    d = T - 25
+    return t, T, 0.05 + 2e-3 * d - 3e-5 * d**2 + 4e-7 * d**3 + 0.003 * rng.normal(size=t.size)
+
+
+def test_dtdt_in_a_single_warmup_is_refused_with_its_reason():
+    t, T, y = _warmup_run()
+    m = GreyBoxDrift(grid_points=8, terms=("temp_rate",)).fit([_run(t, T, y)])
+    assert m.spec_["rate_form"] == 0
+    (refusal,) = m.not_fitted_
+    assert refusal["term"] == "temp_rate" and "linear function of T, T^2, T^3 (1 - R^2 = " in refusal["reason"]
+
+
+def test_a_hysteresis_whose_branch_never_changes_is_refused():
+    t, T, y = _warmup_run()
+    play = (T - np.maximum(T[0], T - 1.0)) / 1.0  # a 2 degC play on a monotonic heat-up
+    m = GreyBoxDrift(grid_points=8, terms=("hysteresis",)).fit([_run(t, T, y + 0.02 * play)])
+    (refusal,) = m.not_fitted_
+    assert m.spec_["width_c"] == 0 and "never reverses by more than 0.5 degC" in refusal["reason"]
+
+
+def test_a_warmup_is_refused_on_a_log_that_does_not_start_at_power_on():
+    t, T, y = _warmup_run()
+    m = GreyBoxDrift(grid_points=8, terms=("warmup",)).fit([_run(t, T, y + 0.03 * np.exp(-t / 900.0), power_on=False)])
+    assert m.spec_["tau_w_s"] == 0 and "does not start at power-on" in m.not_fitted_[0]["reason"]
+
+
+def test_a_lag_shorter_than_a_smooth_transition_is_refused():
+    """T = 30 + 20 tanh(...): T_e - T ~ -tau dT/dt + tau^2 d2T/dt2, a cubic in T while tau << 1800 s."""
+    rng = np.random.default_rng(0)
+    t = np.arange(0, 4 * 3600.0)
+    T = 30 + 20 * np.tanh((t - 7200) / 1800.0)
+    d = T - 25
+    y = 0.05 + 2e-3 * d + 4e-7 * d**3 + 0.003 * rng.normal(size=t.size)
+    m = GreyBoxDrift(grid_points=8, lag_tau_s=(10.0, 300.0), terms=("thermal_lag",)).fit([_run(t, T, y)])
+    (refusal,) = m.not_fitted_
+    assert m.spec_["tau_e_s"] == 0 and refusal["reason"].startswith("thermal_lag (T_e - T) not fitted")
+
+
+def test_the_stateful_kernel_equals_the_registry_shapes_and_chunks_give_the_same_bytes():
+    t = np.arange(0.0, 3000.0)
+    T = _chamber(t, [0, 500, 1500, 2000, 3000], [20, 30, 22, 28, 21], tau_s=60.0)
+    out = np.empty((t.size, 3))
+    advance(t, T, new_state(), 120.0, 30.0, 1.5, out)
+    np.testing.assert_allclose(out[:, 0], shapes.element_temperature(t, T, 120.0), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(out[:, 2], shapes.hysteresis_play(t, T, 3.0), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out[:, 1], (T - shapes.element_temperature(t, T, 30.0)) / 30.0, rtol=0, atol=1e-10)
+    state, chunks = new_state(), np.empty_like(out)
+    for lo in range(0, t.size, 777):
+        advance(t[lo : lo + 777], T[lo : lo + 777], state, 120.0, 30.0, 1.5, chunks[lo : lo + 777])
+    assert np.array_equal(chunks, out)
+
+
+def test_a_gap_is_bridged_exactly_for_a_temperature_linear_through_it(cycle_model):
+    """Samples removed inside a ramp: the states bridge the gap with the temperature linear, so the bias after it is unchanged."""
+    t = np.arange(0.0, 21600.0)
+    T = np.interp(t, *CYCLE)  # piecewise linear, corners at whole seconds
+    whole = cycle_model.predict(t, T)
+    keep = (t < 2500) | (t >= 4000)  # inside the 1800..5400 s ramp
+    gapped = cycle_model.predict(t[keep], T[keep], segments=[slice(0, 2500), slice(2500, int(keep.sum()))])
+    np.testing.assert_allclose(gapped, whole[keep], rtol=0, atol=1e-9)
+    restarted = GreyBoxDrift.from_dict({**cycle_model.to_dict(), "params": {**cycle_model.to_dict()["params"], "bridge_gaps": False}})
+    cold = restarted.predict(t[keep], T[keep], segments=[slice(0, 2500), slice(2500, int(keep.sum()))])
+    assert np.max(np.abs(cold - whole[keep])) > 1e-4  # without the bridge the element restarts at T: a visible error
+
+
+def test_json_round_trip_is_exact_and_bad_files_are_refused(cycle_model):
+    t = np.arange(0.0, 5000.0)
+    T = _chamber(t, *STEPS)
+    again = GreyBoxDrift.from_dict(json.loads(json.dumps(cycle_model.to_dict())))
+    assert np.array_equal(again.predict(t, T), cycle_model.predict(t, T))
+    d = cycle_model.to_dict()
+    with pytest.raises(InputError, match="newer than this gyrocomp reads"):
+        GreyBoxDrift.from_dict({**d, "version": 99}, "m.json")
+    with pytest.raises(InputError, match="non-finite"):
+        GreyBoxDrift.from_dict({**d, "fitted": {**d["fitted"], "offset_": float("nan")}}, "m.json")
+    with pytest.raises(InputError, match="corrupted greybox model"):
+        GreyBoxDrift.from_dict({**d, "fitted": {k: v for k, v in d["fitted"].items() if k != "coef_"}}, "m.json")
+
+
+def test_train_on_two_runs_then_compensate_streamed_and_whole_give_the_same_bytes(tmp_path):
+    t = np.arange(0.0, 21600.0)
+    for name, knots, seed in (("heat", CYCLE, 5), ("cool", STEPS, 6)):
+        T = _chamber(t, *knots)
+        y, _ = _gyro(t, T, seed)
+        pd.DataFrame({"time": t, "gx": y, "gy": -y, "temperature": T}).to_csv(tmp_path / f"{name}.csv", index=False)
+    runner = CliRunner()
+    model = tmp_path / "m.json"
+    result = runner.invoke(app, ["train", str(tmp_path / "heat.csv"), str(tmp_path / "cool.csv"), "--rate-col", "gx,gy",
+                                 "--config", "greybox", "--set", "greybox.grid_points=8", "--out", str(model)])
+    assert result.exit_code == 0, result.output
+    obj = json.loads(model.read_text())
+    assert obj["axes"]["gx"]["kind"] == "greybox" and obj["axes"]["gx"]["training"]["n_runs"] == 2
+    fitted = obj["axes"]["gx"]["greybox"]["fitted"]
+    assert len(fitted["run_offsets_"]) == 2 and fitted["spec_"]["tau_e_s"] == pytest.approx(400, rel=0.15)
+    streamed, whole = tmp_path / "s.csv", tmp_path / "w.csv"
+    assert runner.invoke(app, ["compensate", str(tmp_path / "cool.csv"), str(model), "--rate-col", "gx,gy", "--out", str(streamed)]).exit_code == 0
+    assert runner.invoke(app, ["compensate", str(tmp_path / "cool.csv"), str(model), "--rate-col", "gx,gy", "--plot", str(tmp_path / "p.png"),
+                               "--out", str(whole)]).exit_code == 0
+    assert streamed.read_bytes() == whole.read_bytes()
+    out = pd.read_csv(whole)
+    assert np.std(out["gx_compensated"]) < 0.2 * np.std(out["gx"])
