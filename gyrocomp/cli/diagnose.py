@@ -45,6 +45,11 @@ def diagnose(
     config: Annotated[str, typer.Option("--config", help="TOML with a [diagnose] table.")] = "diagnose",
     plot: Annotated[Optional[Path], typer.Option("--plot", help="gap.png: gap by regime and timescale, before/after.")] = None,
     markdown: Annotated[Optional[Path], typer.Option("--markdown", help="report.md to write.")] = None,
+    model_out: Annotated[
+        Optional[Path],
+        typer.Option("--model-out", help="model.json to write: the greybox model of the selected effects, fitted on the selection runs, "
+                     "ready for compensate and export."),
+    ] = None,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
@@ -73,3 +78,13 @@ def diagnose(
             if "axes" in report:
                 table.title = f"[{axis}] {table.title}"
             console.print(table)
+            if "model_out" in verdict:
+                m = verdict["model_out"]
+                left = [*m["not_held"], *(r["term"] + " (not identifiable)" for r in m["not_fitted"])]
+                if m["unexplained_structure"]:
+                    left.append("the structure the residual tests flag")
+                console.print(
+                    f"{m['path']}: greybox model of {', '.join(m['terms']) or 'the baseline alone'}"
+                    + (f"; it leaves out {', '.join(left)}" if left else ""),
+                    markup=False, highlight=False,
+                )

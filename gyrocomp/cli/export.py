@@ -24,6 +24,7 @@ def export(
     vectors: Annotated[Optional[Path], typer.Option("--vectors", help="c: recording whose first --n-vectors samples become the test vectors (default: a synthetic sweep across and beyond the training ranges).")] = None,
     n_vectors: Annotated[int, typer.Option("--n-vectors", help="c: number of test-vector samples.")] = 2048,
     prefix: Annotated[str, typer.Option("--prefix", help="c: prefix of the header's names.")] = "gyrocomp",
+    static_part: Annotated[bool, typer.Option("--static-part", help="px4 / ardupilot: write a greybox model's cubic in T alone, dropping its state (lag, dT/dt, hysteresis, warm-up), and report what that costs on the training runs.")] = False,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
@@ -45,7 +46,9 @@ def export(
         models, summary = stage.to_files([model], out, from_params(stage.Options, ctx.params))
     console = console_for(ctx, out)
     added = summary.get("added_error_deg_h")
-    note = f"; the fitted cubic adds {added['rms']:.3g} deg/h RMS, {added['max']:.3g} deg/h at most over the training range" if added else ""
+    what = "dropping the greybox state leaves" if static_part else "the fitted cubic adds"
+    where = "of 100 s means on the training runs" if static_part else "over the training range"
+    note = f"; {what} {added['rms']:.3g} deg/h RMS, {added['max']:.3g} deg/h at most {where}" if added else ""
     if fmt == "px4" and device_id == 0:
         print("gyrocomp: warning: TC_G ID = 0; set --device-id to the gyro's CAL_GYRO<n>_ID, PX4 applies the slot to that sensor only", file=sys.stderr)
     kinds = ", ".join(sorted({m.kind for m in models.values()}))

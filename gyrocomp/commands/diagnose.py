@@ -10,7 +10,7 @@ from typing import Callable, Optional, Sequence
 from gyrocomp.commands import guarded
 from gyrocomp.recordings import ColumnSpec
 
-__all__ = ["Options", "to_files"]
+__all__ = ["Options", "to_files", "greybox_of"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -31,6 +31,9 @@ class Options:
         ``gap.png`` to write: gap by regime and timescale, before and after.
     markdown : path-like or None
         ``report.md`` to write.
+    model_out : path-like or None
+        ``model.json`` to write: the ``greybox`` model of the selected
+        effects it can hold, fitted on the selection runs (:func:`greybox_of`).
     columns : gyrocomp.recordings.ColumnSpec
     resample : bool
         Interpolate a jittered time axis instead of refusing it.
@@ -41,13 +44,14 @@ class Options:
     config: str = "diagnose"
     plot: Optional[str | os.PathLike] = None
     markdown: Optional[str | os.PathLike] = None
+    model_out: Optional[str | os.PathLike] = None
     columns: ColumnSpec = ColumnSpec()
     resample: bool = False
 
 
 def written(out, options) -> list:
     """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
-    return [out, options.markdown, options.plot]
+    return [out, options.markdown, options.plot, options.model_out]
 
 
 @guarded(written)
@@ -102,6 +106,17 @@ def to_files(
         bodies[axis] = diagnose(
             fit_rec.axis(axis), held, settings, start_effects=start, callback=progress, unexplained_settings=unexplained_settings
         )
+    if options.model_out is not None:
+        models, units, left_out = {}, {}, {}
+        for axis, body in bodies.items():
+            runs = [rec.axis(axis if len(fit_rec.axes) > 1 else None) for rec in [fit_rec] + hold_recs[:-1]]
+            trained, unit, left_out[axis] = greybox_of(body, runs)
+            models.update(trained), units.update(unit)
+        from gyrocomp.pipeline.train import model_file
+
+        artefacts.write_json(options.model_out, model_file(models, units))
+        for axis, body in bodies.items():
+            body["model_out"] = {"path": str(options.model_out), **left_out[axis]}
     records = [rec.input_record() for rec in [fit_rec] + hold_recs]
     report = to_json({}, inputs=records, settings={**settings_dict(settings), "unexplained": settings_dict(unexplained_settings)})
     verdicts = {axis: {**report, **to_json(body, inputs=records, settings=report["settings"]), "axis": axis} for axis, body in bodies.items()}
@@ -119,3 +134,44 @@ def to_files(
         for axis, verdict in verdicts.items():
             plots.save(plots.gap_figure(verdict), plot if len(verdicts) == 1 else plot.with_name(f"{plot.stem}_{axis}{plot.suffix}"), dpi=100)
     return report
+
+
+def greybox_of(body: dict, runs: list) -> tuple[dict, dict, dict]:
+    """The ``greybox`` model of the effects a diagnosis selected, fitted on its selection runs.
+
+    Parameters
+    ----------
+    body : dict
+        The diagnosis of one axis (:func:`gyrocomp.diagnose.diagnose`).
+    runs : list of gyrocomp.recordings.Recording
+        That axis of the fit run and of the holdouts that took part in the
+        selection (every holdout but the last).
+
+    Returns
+    -------
+    models, units : dict
+        As :func:`gyrocomp.pipeline.greybox.train_greybox`.
+    left_out : dict
+        ``terms`` fitted, and what the model leaves out: the selected
+        effects it cannot hold (noise terms, a periodic or a ramp), the terms
+        the runs could not identify, and whether the residual tests found
+        structure no effect explains.
+    """
+    from gyrocomp.config import apply_overrides, load_config
+    from gyrocomp.models.greybox import TERMS
+    from gyrocomp.pipeline.greybox import train_greybox
+
+    selected = list(body["selected_effects"])
+    terms = [t for t in TERMS if t in selected]
+    config = apply_overrides(load_config("greybox"), [f"greybox.terms={terms!r}".replace("'", '"'), 'greybox.selection="all"'])
+    models, units = train_greybox(runs, config, source="diagnose --model-out")
+    not_fitted = [r for m in models.values() for r in m["not_fitted"]]
+    unexplained = body.get("unexplained", {}) or {}
+    left_out = {
+        "terms": terms,
+        "not_held": [e for e in selected if e not in TERMS],
+        "not_fitted": not_fitted,
+        "unexplained_structure": bool(unexplained.get("present")),
+    }
+    return models, units, left_out
+

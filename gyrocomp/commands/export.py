@@ -21,7 +21,7 @@ class Options:
     Attributes
     ----------
     fmt : {"px4", "ardupilot", "c", "json-plain"}
-    fit_polynomial, axis, instance, device_id, n_vectors, prefix
+    fit_polynomial, axis, instance, device_id, n_vectors, prefix, static_part
         As :class:`gyrocomp.export.ExportOptions`.
     vectors : path or None
         c: recording whose first `n_vectors` samples become the test vectors.
@@ -38,6 +38,7 @@ class Options:
     n_vectors: int = 2048
     prefix: str = "gyrocomp"
     columns: ColumnSpec = ColumnSpec()
+    static_part: bool = False
 
 
 def written(out, options) -> list:
@@ -69,7 +70,8 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
             columns = dataclasses.replace(columns, rate=",".join(drift))
         recording = recordings.read_recording(options.vectors, columns, require_temperature=True, min_samples=2)
     export_options = ExportOptions(
-        options.fit_polynomial, options.axis.lower(), options.instance, options.device_id, recording, options.n_vectors, options.prefix
+        options.fit_polynomial, options.axis.lower(), options.instance, options.device_id, recording, options.n_vectors, options.prefix,
+        static_part=options.static_part,
     )
     text, summary = export_model(drift, options.fmt, export_options)
     if str(out) == "-":

@@ -270,7 +270,12 @@ def _train_method(config, source, name, train_rec, folder: Path, seed, workers, 
     else:
         step(f"{name}: train", 0, 1)
         t0 = time.perf_counter()
-        model = train_direct(train_rec, config, source=source, seed=seed)
+        if pipeline.kind == "greybox":
+            from gyrocomp.pipeline.greybox import train_greybox
+
+            model = next(iter(train_greybox([train_rec], config, source=source, seed=seed)[0].values()))
+        else:
+            model = train_direct(train_rec, config, source=source, seed=seed)
         info["stage_times_s"]["train"] = time.perf_counter() - t0
     info["train_time_s"] = time.perf_counter() - t_train
     artefacts.write_json(model_path, model_file({"rate": model}))

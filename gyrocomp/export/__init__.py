@@ -45,6 +45,10 @@ class ExportOptions:
     n_vectors : int
     prefix : str
         c: prefix of the header's names.
+    static_part : bool
+        px4 / ardupilot: write a grey-box model's static part (its offset and
+        cubic in temperature), dropping its lag, dT/dt, hysteresis and
+        warm-up; the summary gives what that costs on the training runs.
     """
 
     fit_polynomial: bool = False
@@ -54,6 +58,7 @@ class ExportOptions:
     vectors: object = None
     n_vectors: int = 2048
     prefix: str = "gyrocomp"
+    static_part: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -159,7 +164,9 @@ def _cubics(models: dict, options: ExportOptions, max_degree: int = 3) -> tuple[
     cubics, added = {}, {}
     letters = _firmware_axes(models, options)
     for name, model in models.items():
-        if options.fit_polynomial:
+        if model.kind == "greybox":
+            cubics[letters[name]] = cubic = _static_part(model, options)
+        elif options.fit_polynomial:
             try:
                 cubic = exact_cubic(model, max_degree)
             except InputError:
@@ -174,6 +181,21 @@ def _cubics(models: dict, options: ExportOptions, max_degree: int = 3) -> tuple[
         summary["added_error_deg_h"] = {key: max(a[key] for a in added.values()) for key in ("rms", "max")}
         summary["added_error_deg_h_by_axis"] = added
     return cubics, summary
+
+
+def _static_part(model, options: ExportOptions):
+    """A grey-box model's offset and cubic in T as a :class:`~gyrocomp.export.cubic.Cubic`, only with ``static_part``."""
+    from gyrocomp.export.cubic import Cubic
+
+    cost = model.obj["static_part"]["cost_deg_h"]
+    e = model.estimator
+    if not options.static_part:
+        raise InputError(
+            f"{model.name}: a greybox model holds state (lag, dT/dt, hysteresis, warm-up) that PX4 and ArduPilot parameters cannot; "
+            f"--static-part writes its cubic in T alone, which leaves {cost['rms']:.3g} deg/h RMS ({cost['max']:.3g} at most) of 100 s means "
+            "on the training runs; --format c keeps the whole model"
+        )
+    return Cubic(float(e.reference_temperature), tuple(e.coef_about_reference_), tuple(e.temperature_range_c_), {"rms": cost["rms"], "max": cost["max"]})
 
 
 def _source(models: dict) -> str:
@@ -202,12 +224,19 @@ def _c(models: dict, options: ExportOptions):
 
     blocks, counts = [], {}
     for name, model in models.items():
+        prefix = options.prefix if len(models) == 1 else f"{options.prefix}_{name}"
+        if model.kind == "greybox":
+            from gyrocomp.export.greybox_c import greybox_header, greybox_vectors
+
+            vectors = greybox_vectors(model, options.n_vectors)
+            blocks.append(greybox_header(model, vectors, prefix=prefix))
+            counts[str(name)] = len(vectors["time_s"])
+            continue
         recording = options.vectors
         if recording is not None:
             names = recording.axis_names
             recording = recording.axis(name if name in names else names[0])
         vectors = reference_vectors(model, recording, options.n_vectors)
-        prefix = options.prefix if len(models) == 1 else f"{options.prefix}_{name}"
         blocks.append(c_header(plain_model(model, centred=True), vectors, prefix=prefix))
         counts[str(name)] = len(vectors["temperature_c"])
     return "\n".join(blocks), {"n_vectors": min(counts.values()), "prefixes": len(blocks)}

@@ -141,6 +141,10 @@ class GreyBoxDrift:
         Identifiability cut-off (:func:`gyrocomp.identifiability.separable`).
     bridge_gaps : bool
         Carry the state across a gap with the temperature bridged linearly.
+    selection : {"bic", "all"}
+        ``bic``: a term is added while it lowers the BIC by more than
+        ``bic_margin``; ``all``: every identifiable term of `terms` is
+        fitted (the terms were chosen elsewhere: ``diagnose --model-out``).
 
     Attributes
     ----------
@@ -181,6 +185,7 @@ class GreyBoxDrift:
         bic_margin=10.0,
         min_unique_variance=0.01,
         bridge_gaps=True,
+        selection="bic",
     ):
         self.degree = degree
         self.reference_temperature = reference_temperature
@@ -195,6 +200,7 @@ class GreyBoxDrift:
         self.bic_margin = bic_margin
         self.min_unique_variance = min_unique_variance
         self.bridge_gaps = bridge_gaps
+        self.selection = selection
 
     # --- contract -----------------------------------------------------------
     @classmethod
@@ -228,6 +234,8 @@ class GreyBoxDrift:
             lo, hi = getattr(self, name)
             if not 0 < lo <= hi < math.inf:
                 raise InputError(f"{owner}: {name} = {getattr(self, name)!r} must be (low, high) with 0 < low <= high")
+        if self.selection not in ("bic", "all"):
+            raise InputError(f"{owner}: selection = {self.selection!r}; choose bic or all")
         if not all(0 < w < math.inf for w in self.widths_c):
             raise InputError(f"{owner}: widths_c = {self.widths_c!r} must be finite widths > 0 degC")
         if not (isinstance(self.max_blocks, int) and self.max_blocks >= 16 and isinstance(self.grid_points, int) and self.grid_points >= 2):
@@ -308,6 +316,13 @@ class GreyBoxDrift:
             stream.restart_if_not_bridged()
             out[s] = stream(time_s[s], temperature_c[s])
         return out
+
+    def static(self, temperature_c) -> np.ndarray:
+        """The bias [deg/s] held at each temperature long enough to settle: the offset and the cubic (T clamped
+        to the training range), no rate, the play centred, the warm-up over. What firmware's cubic can hold."""
+        self._check_fitted()
+        z = (np.clip(np.asarray(temperature_c, dtype=float), *self.temperature_range_c_) - self.centre_c_) / self.half_range_c_
+        return self.offset_ + sum(self.coef_.get(f"z{k}", 0.0) * z**k for k in range(1, self.degree + 1))
 
     def _check_fitted(self) -> None:
         if not hasattr(self, "coef_"):
@@ -659,7 +674,7 @@ class _Search:
             t_blocks, _, t_names = self.design(trial)
             t_noise, t_dev, _ = self.fit_noise(t_blocks, noise)
             t_score = self.bic(t_dev, self.n_params(trial, t_names, 3))
-            if score - t_score <= m.bic_margin:
+            if m.selection == "bic" and score - t_score <= m.bic_margin:
                 break
             steps.append({"term": term, "params": _params(trial, term), "delta_bic": float(t_score - score)})
             spec, noise, score = trial, t_noise, t_score

@@ -98,8 +98,26 @@ def train_greybox(runs: list, config: dict, *, source: str, seed: int | None = 0
                 "n_segments": int(sum(len(rec.segments) for rec in runs)),
             },
         }
+        models[name]["static_part"] = {"cost_deg_h": _static_cost(estimator, training)}
         units[name] = axes[0].axes[0].unit
     return models, units
+
+
+def _static_cost(estimator: GreyBoxDrift, runs: list, block_s: float = 100.0) -> dict:
+    """What the offset and cubic at the measured temperature alone (firmware parameters) leave of the whole model on the training runs.
+
+    RMS and largest absolute value [deg/h] of the 100 s means (DESIGN.md's
+    residual-drift convention) of the whole model minus its static part.
+    """
+    lost = []
+    for run in runs:
+        whole = estimator.predict(run.time_s, run.temperature_c, segments=run.segments)
+        static = estimator.static(run.temperature_c)
+        per_block = max(1, int(round(block_s / float(np.median(np.diff(run.time_s))))))
+        k = run.time_s.size // per_block
+        lost.append((whole - static)[: k * per_block].reshape(k, per_block).mean(axis=1) * 3600.0)
+    lost = np.concatenate(lost)
+    return {"rms": float(np.sqrt(np.mean(lost**2))), "max": float(np.max(np.abs(lost)))}
 
 
 @dataclasses.dataclass
@@ -119,10 +137,8 @@ class GreyBoxModel:
         return float(r["min"]), float(r["max"])
 
     def static(self, temperature_c) -> np.ndarray:
-        """The bias [deg/s] held at each temperature long enough to settle: offset + cubic, no rate, play centred, warm-up over."""
-        e = self.estimator
-        z = (np.clip(np.asarray(temperature_c, dtype=float), *e.temperature_range_c_) - e.centre_c_) / e.half_range_c_
-        return e.offset_ + sum(e.coef_.get(f"z{k}", 0.0) * z**k for k in range(1, e.degree + 1))
+        """The settled bias [deg/s] at each temperature (:meth:`GreyBoxDrift.static`)."""
+        return self.estimator.static(temperature_c)
 
     def inputs(self, temperature_c, fs_hz: float, *, causal: bool, bounds=None) -> np.ndarray:
         """[T, dT/dt] by the static models' estimator (:func:`gyrocomp.pipeline.train.segment_inputs`), for plots' heating and cooling branches."""

@@ -1,0 +1,254 @@
+"""The grey-box model against the autopilots' cubic on held-out runs (issue 34).
+
+Four parts, each scored by the held-out residual drift: the standard
+deviation of the 100 s means of ``rate - model`` after its mean is removed
+(a turn-on offset is no temperature effect), in deg/h.
+
+* ``sample``: ``sample_data`` (train on ``oven_train``, hold out
+  ``oven_test``); the floor is the same statistic of the simulator's
+  stochastic truth columns of ``oven_test`` (white + flicker + random walk,
+  what no temperature model removes), rerun from ``configs/sample``.
+* ``independent``: pairs of :mod:`benchmarks.independent_gen` (its own
+  shapes, profiles and noise; it imports nothing of gyrocomp) for the
+  thermal-lag, dT/dt, hysteresis and warm-up forms and four effect-free
+  pairs per seed, on check seeds the model was never tuned on
+  (:data:`CHECK_SEEDS`); the floor is the expectation of the statistic for
+  the pair's white noise alone.
+* ``heating_cooling``: one gyro (lag, asymmetric dT/dt, play, warm-up;
+  written here with NumPy loops) trained on a heating run and held out on a
+  cooling run, and the other way round.
+* ``tvac``: the LSM6DSM thermal-vacuum log (``../shared/real-data``), fitted
+  on the even bursts and held out on the odd ones; the statistic is the
+  standard deviation of the burst means (5 s each).
+
+Usage: ``python benchmarks/greybox.py [--part sample|independent|heating_cooling|tvac|all] [--seeds 3001 3002]``;
+writes ``benchmarks/results/greybox.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+CHECK_SEEDS = (3001, 3002)
+"""Seeds of the independent generator never looked at while the grey-box model was built."""
+KEYS = [
+    "thermal_lag/first_order", "thermal_lag/two_parallel_lags", "thermal_lag/two_lags_in_series",
+    "temp_rate/linear", "temp_rate/heating_cooling_asymmetric", "temp_rate/saturating",
+    "hysteresis/two_branch_relay", "hysteresis/preisach_width_spread", "hysteresis/play_operator",
+    "warmup/single_exponential", "warmup/two_time_constants", "warmup/stretched_exponential",
+]
+BLOCK_S = 100.0
+TVAC = ROOT.parent / "shared" / "real-data" / "pan-lsm6dsm-tvac" / "pan_lsm6dsm_tvac_cold_2020-03-07.csv"
+
+
+def block_std_deg_h(t, x, block_s=BLOCK_S):
+    """Std of the means of `block_s` blocks of `x` (gaps: blocks never span one), mean removed [deg/h]."""
+    t, x = np.asarray(t, dtype=float), np.asarray(x, dtype=float)
+    index = np.floor((t - t[0]) / block_s).astype(int)
+    counts = np.bincount(index)
+    sums = np.bincount(index, weights=x)
+    means = sums[counts > 0] / counts[counts > 0]
+    return float(np.std(means - means.mean()) * 3600.0)
+
+
+def cubic_fit(T, y, T_new):
+    """The autopilots' calibration: least squares cubic in the measured temperature (about 25 degC)."""
+    A = lambda u: np.column_stack([np.ones_like(u), u - 25, (u - 25) ** 2, (u - 25) ** 3])  # noqa: E731
+    return A(T_new) @ np.linalg.lstsq(A(T), y, rcond=None)[0]
+
+
+def greybox_fit(runs, **params):
+    from gyrocomp.models.greybox import GreyBoxDrift, TrainingRun
+
+    return GreyBoxDrift(**params).fit([TrainingRun(t, T, y, segs, float(t[0]), name) for t, T, y, segs, name in runs])
+
+
+def _whole(t):
+    return [slice(0, len(t))]
+
+
+def sample():
+    """The sample pair, with the floor from the simulator's truth columns."""
+    import pandas as pd
+
+    from gyrocomp.sim.model import load_sim_config
+    from gyrocomp.sim.simulate import run
+
+    train = pd.read_parquet(ROOT / "sample_data" / "oven_train.parquet")
+    test = pd.read_parquet(ROOT / "sample_data" / "oven_test.parquet")
+    frame, _ = run(load_sim_config(ROOT / "configs" / "sample" / "oven_test.toml", truth_columns=True))
+    assert np.array_equal(frame["rate"].to_numpy(), test["rate"].to_numpy()), "sample_data/oven_test.parquet is not configs/sample/oven_test.toml"
+    stochastic = sum(frame[c].to_numpy() for c in frame.columns if c in ("truth_noise", "truth_bias_instability", "truth_rate_random_walk"))
+    t, T, y = (train[c].to_numpy() for c in ("time", "temperature", "rate"))
+    tt, TT, yy = (test[c].to_numpy() for c in ("time", "temperature", "rate"))
+    start = time.process_time()
+    model = greybox_fit([(t, T, y, _whole(t), "oven_train")])
+    fit_cpu = time.process_time() - start
+    floor = block_std_deg_h(tt, stochastic)
+    greybox = block_std_deg_h(tt, yy - model.predict(tt, TT))
+    cubic = block_std_deg_h(tt, yy - cubic_fit(T, y, TT))
+    return {
+        "floor_deg_h": floor, "greybox_deg_h": greybox, "cubic_deg_h": cubic,
+        "greybox_over_floor": greybox / floor, "cubic_over_floor": cubic / floor,
+        "spec": model.spec_, "selection": model.selection_, "not_fitted": model.not_fitted_, "fit_cpu_s": fit_cpu,
+    }
+
+
+def independent(seeds=CHECK_SEEDS):
+    """Each effect form and four effect-free pairs per seed: greybox and cubic against the white-noise floor."""
+    import independent_gen as gen
+
+    rows = []
+    for seed in seeds:
+        for index, key in enumerate(KEYS + [gen.NONE] * 4):
+            case = gen.draw_case(seed, index, key)
+            runs, realised = gen.generate_pair(case)
+            fit, hold = runs["fit"], runs["holdout"]
+            n_block = int(round(BLOCK_S * case["fs_hz"]))
+            floor = realised["sigma_per_sample_dps"] / np.sqrt(n_block) * 3600.0
+            start = time.process_time()
+            model = greybox_fit([(fit["time"], fit["temperature"], fit["rate"], _whole(fit["time"]), "fit")])
+            cpu = time.process_time() - start
+            greybox = block_std_deg_h(hold["time"], hold["rate"] - model.predict(hold["time"], hold["temperature"]))
+            cubic = block_std_deg_h(hold["time"], hold["rate"] - cubic_fit(fit["temperature"], fit["rate"], hold["temperature"]))
+            rows.append({
+                "seed": seed, "index": index, "key": key, "category": case["category"], "fs_hz": case["fs_hz"],
+                "floor_deg_h": floor, "greybox_deg_h": greybox, "cubic_deg_h": cubic,
+                "greybox_over_floor": greybox / floor, "cubic_over_greybox": cubic / greybox,
+                "terms": [s["term"] for s in model.selection_], "not_fitted": [r["term"] for r in model.not_fitted_], "fit_cpu_s": cpu,
+            })
+            print(f"{seed} {key:40s} floor {floor:7.2f}  greybox {greybox:8.2f}  cubic {cubic:8.2f}  {rows[-1]['terms']}", flush=True)
+    effects = [r for r in rows if r["category"] != "none"]
+    free = [r for r in rows if r["category"] == "none"]
+    return {
+        "seeds": list(seeds),
+        "rows": rows,
+        "effects_median_greybox_over_floor": float(np.median([r["greybox_over_floor"] for r in effects])),
+        "effects_min_cubic_over_greybox": float(min(r["cubic_over_greybox"] for r in effects)),
+        "effects_at_least_3x_better": sum(r["cubic_over_greybox"] >= 3 for r in effects),
+        "n_effects": len(effects),
+        "effect_free_max_greybox_over_cubic": float(max(1 / r["cubic_over_greybox"] for r in free)),
+    }
+
+
+def _chamber(t, knots_t, knots_c, tau_s=300.0):
+    T = np.interp(t, knots_t, knots_c)
+    out = np.empty_like(T)
+    out[0] = T[0]
+    a = np.exp(-(t[1] - t[0]) / tau_s)
+    for i in range(1, T.size):
+        out[i] = a * out[i - 1] + (1 - a) * T[i]
+    return out
+
+
+def _gyro(t, T, seed):
+    """Lag 400 s, dT/dt 1.5 (+0.5 heating, -0.5 cooling) deg/s per degC/s, a 4 degC play of 0.01 deg/s, warm-up 0.03 deg/s / 900 s."""
+    rng = np.random.default_rng(seed)
+    Te = np.empty_like(T)
+    Te[0] = T[0]
+    for i in range(1, T.size):
+        Te[i] = Te[i - 1] + (T[i] - Te[i - 1]) * (1 - np.exp(-(t[i] - t[i - 1]) / 400.0))
+    d = Te - 25.0
+    r = np.gradient(T, t)
+    p, play = T[0], np.empty_like(T)
+    for i in range(T.size):
+        p = min(max(p, T[i] - 2.0), T[i] + 2.0)
+        play[i] = (T[i] - p) / 2.0
+    bias = 0.05 + 2e-3 * d - 3e-5 * d**2 + 4e-7 * d**3 + 1.5 * r + 0.5 * np.abs(r) + 0.01 * play + 0.03 * np.exp(-(t - t[0]) / 900.0)
+    noise = 0.003 * rng.normal(size=t.size) + np.cumsum(2e-6 * rng.normal(size=t.size))
+    return bias + noise, noise
+
+
+def heating_cooling():
+    """Train on heating, hold out cooling, and the other way round (cubic and greybox)."""
+    t = np.arange(0.0, 6 * 3600.0)
+    profiles = {
+        "heating": ([0, 1800, 5400, 7200, 10800, 12600, 16200, 21600], [-10, -10, 15, 15, 40, 40, 60, 60]),
+        "cooling": ([0, 1800, 5400, 7200, 10800, 12600, 16200, 21600], [60, 60, 35, 35, 10, 10, -10, -10]),
+    }
+    runs = {name: (_chamber(t, *knots),) for name, knots in profiles.items()}
+    runs = {name: (T, *_gyro(t, T, seed)) for (name, (T,)), seed in zip(runs.items(), (11, 12))}
+    rows = []
+    for train, test in (("heating", "cooling"), ("cooling", "heating")):
+        T, y, _ = runs[train]
+        TT, yy, noise = runs[test]
+        model = greybox_fit([(t, T, y, _whole(t), train)])
+        rows.append({
+            "train": train, "test": test, "floor_deg_h": block_std_deg_h(t, noise),
+            "cubic_deg_h": block_std_deg_h(t, yy - cubic_fit(T, y, TT)),
+            "greybox_deg_h": block_std_deg_h(t, yy - model.predict(t, TT)),
+            "terms": [s["term"] for s in model.selection_], "not_fitted": [r["term"] for r in model.not_fitted_],
+        })
+    return rows
+
+
+def tvac():
+    """The LSM6DSM thermal-vacuum log: even bursts train, odd bursts hold out (each axis)."""
+    import pandas as pd
+
+    if not TVAC.is_file():
+        return {"skipped": f"{TVAC} absent"}
+    frame = pd.read_csv(TVAC).drop_duplicates("time", keep="first")
+    t, T = frame["time"].to_numpy(), frame["temperature"].to_numpy()
+    burst = np.concatenate([[0], np.cumsum(np.diff(t) > 10.0)])
+    out = {}
+    for axis in ("rate_x", "rate_y", "rate_z"):
+        y = frame[axis].to_numpy()
+        parts = {}
+        for role, parity in (("fit", 0), ("holdout", 1)):
+            keep = burst % 2 == parity
+            tk, Tk, yk, bk = t[keep], T[keep], y[keep], burst[keep]
+            edges = np.flatnonzero(np.diff(bk)) + 1
+            segs = [slice(a, b) for a, b in zip(np.r_[0, edges], np.r_[edges, tk.size])]
+            parts[role] = (tk, Tk, yk, segs, bk)
+        tf, Tf, yf, sf, _ = parts["fit"]
+        th, Th, yh, sh, bh = parts["holdout"]
+        model = greybox_fit([(tf, Tf, yf, sf, "even bursts")], block_s=1.0, max_blocks=200)
+        means = lambda x: np.array([x[bh == b].mean() for b in np.unique(bh)]) * 3600.0  # noqa: E731
+        raw = means(yh)
+        cubic = means(yh - cubic_fit(Tf, yf, Th))
+        greybox = means(yh - model.predict(th, Th, segments=sh))
+        out[axis] = {
+            "raw_deg_h": float(np.std(raw - raw.mean())), "cubic_deg_h": float(np.std(cubic - cubic.mean())),
+            "greybox_deg_h": float(np.std(greybox - greybox.mean())), "terms": [s["term"] for s in model.selection_],
+            "not_fitted": model.not_fitted_,
+        }
+    return out
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--part", default="all", choices=["sample", "independent", "heating_cooling", "tvac", "all"])
+    parser.add_argument("--seeds", type=int, nargs="+", default=list(CHECK_SEEDS))
+    args = parser.parse_args(argv)
+    sys.path.insert(0, str(ROOT))
+    path = HERE / "results" / "greybox.json"
+    results = json.loads(path.read_text()) if path.is_file() else {}
+    parts = ["sample", "independent", "heating_cooling", "tvac"] if args.part == "all" else [args.part]
+    for part in parts:
+        results[part] = independent(args.seeds) if part == "independent" else globals()[part]()
+        print(part, json.dumps({k: v for k, v in results[part].items() if k != "rows"} if isinstance(results[part], dict) else results[part], indent=1))
+    results["machine"] = {
+        "commit": subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip(),
+        "python": platform.python_version(), "cpu": platform.machine(), "load_1min": os.getloadavg()[0],
+    }
+    path.write_text(json.dumps(results, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
