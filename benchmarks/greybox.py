@@ -21,7 +21,8 @@ deviation of the 100 s means of ``rate - model`` after its mean is removed
   on the even bursts and held out on the odd ones; the statistic is the
   standard deviation of the burst means (5 s each).
 
-Usage: ``python benchmarks/greybox.py [--part sample|independent|heating_cooling|tvac|all] [--seeds 3001 3002]``;
+Usage: ``python benchmarks/greybox.py [--part sample|independent|strong|heating_cooling|tvac|all] [--seeds 3001 3002]``
+(``strong``: the independent pairs with effects of visibility 200 to 400);
 writes ``benchmarks/results/greybox.json``.
 """
 
@@ -52,6 +53,8 @@ KEYS = [
     "hysteresis/two_branch_relay", "hysteresis/preisach_width_spread", "hysteresis/play_operator",
     "warmup/single_exponential", "warmup/two_time_constants", "warmup/stretched_exponential",
 ]
+STRONG_Z = (200.0, 400.0)
+"""Visibility of the ``strong`` pairs: the cubic leaves 12 to 24 times the floor, as on the pairs issue 34 quotes."""
 BLOCK_S = 100.0
 TVAC = ROOT.parent / "shared" / "real-data" / "pan-lsm6dsm-tvac" / "pan_lsm6dsm_tvac_cold_2020-03-07.csv"
 
@@ -109,15 +112,24 @@ def sample():
     }
 
 
-def independent(seeds=CHECK_SEEDS):
-    """Each effect form and four effect-free pairs per seed: greybox and cubic against the white-noise floor."""
+def independent(seeds=CHECK_SEEDS, z=None):
+    """Each effect form and four effect-free pairs per seed: greybox and cubic against the white-noise floor.
+
+    `z` replaces the generator's visibility range ``[amplitude] z`` (8 to 40,
+    the edge of detectability): there the cubic leaves about ``z / 17`` times
+    the floor of 100 s means on 8 h runs, so "3x better than the cubic" can
+    only be asked of stronger effects (``z`` 200 to 400: 12 to 24 times).
+    """
     import independent_gen as gen
 
+    cfg = gen.load_config()
+    if z is not None:
+        cfg["amplitude"]["z"] = list(z)
     rows = []
     for seed in seeds:
         for index, key in enumerate(KEYS + [gen.NONE] * 4):
-            case = gen.draw_case(seed, index, key)
-            runs, realised = gen.generate_pair(case)
+            case = gen.draw_case(seed, index, key, cfg=cfg)
+            runs, realised = gen.generate_pair(case, cfg)
             fit, hold = runs["fit"], runs["holdout"]
             n_block = int(round(BLOCK_S * case["fs_hz"]))
             floor = realised["sigma_per_sample_dps"] / np.sqrt(n_block) * 3600.0
@@ -137,6 +149,7 @@ def independent(seeds=CHECK_SEEDS):
     free = [r for r in rows if r["category"] == "none"]
     return {
         "seeds": list(seeds),
+        "z": cfg["amplitude"]["z"],
         "rows": rows,
         "effects_median_greybox_over_floor": float(np.median([r["greybox_over_floor"] for r in effects])),
         "effects_min_cubic_over_greybox": float(min(r["cubic_over_greybox"] for r in effects)),
@@ -233,15 +246,18 @@ def tvac():
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--part", default="all", choices=["sample", "independent", "heating_cooling", "tvac", "all"])
+    parser.add_argument("--part", default="all", choices=["sample", "independent", "strong", "heating_cooling", "tvac", "all"])
     parser.add_argument("--seeds", type=int, nargs="+", default=list(CHECK_SEEDS))
     args = parser.parse_args(argv)
     sys.path.insert(0, str(ROOT))
     path = HERE / "results" / "greybox.json"
     results = json.loads(path.read_text()) if path.is_file() else {}
-    parts = ["sample", "independent", "heating_cooling", "tvac"] if args.part == "all" else [args.part]
+    parts = ["sample", "independent", "strong", "heating_cooling", "tvac"] if args.part == "all" else [args.part]
     for part in parts:
-        results[part] = independent(args.seeds) if part == "independent" else globals()[part]()
+        if part in ("independent", "strong"):
+            results[part] = independent(args.seeds, None if part == "independent" else STRONG_Z)
+        else:
+            results[part] = globals()[part]()
         print(part, json.dumps({k: v for k, v in results[part].items() if k != "rows"} if isinstance(results[part], dict) else results[part], indent=1))
     results["machine"] = {
         "commit": subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip(),

@@ -674,7 +674,11 @@ class _Search:
             t_blocks, _, t_names = self.design(trial)
             t_noise, t_dev, _ = self.fit_noise(t_blocks, noise)
             t_score = self.bic(t_dev, self.n_params(trial, t_names, 3))
-            if m.selection == "bic" and score - t_score <= m.bic_margin:
+            upgrade = term == "temp_rate" and spec.rate_form > 0  # heating and cooling apart must pay, whatever `selection`
+            if (m.selection == "bic" or upgrade) and score - t_score <= m.bic_margin:
+                if upgrade and m.selection == "all" and len(remaining) > 1:
+                    remaining.remove(term)
+                    continue
                 break
             steps.append({"term": term, "params": _params(trial, term), "delta_bic": float(t_score - score)})
             spec, noise, score = trial, t_noise, t_score

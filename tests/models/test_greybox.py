@@ -287,3 +287,22 @@ def test_c_header_compiles_strictly_and_reproduces_python(cycle_model, tmp_path)
         export_model(model, "px4", ExportOptions())
     text, summary = export_model(model, "px4", ExportOptions(static_part=True, device_id=1))
     assert "TC_G0_X3_0" in text and summary["added_error_deg_h"] == {"rms": 1.0, "max": 2.0}
+
+
+def test_diagnose_model_out_fits_the_selected_effects_it_can_hold():
+    """greybox_of: the diagnosis' selected effects that are grey-box terms, fitted with selection "all"; the rest named as left out."""
+    from gyrocomp.commands.diagnose import greybox_of
+    from gyrocomp.recordings import recording_from_frame
+
+    t = np.arange(0, 21600.0)
+    T = _chamber(t, *CYCLE)
+    y, _ = _gyro(t, T, 1, rate=0.0, asym=0.0, play=0.0)
+    run = recording_from_frame(pd.DataFrame({"time": t, "rate": y, "temperature": T}), name="fit")
+    body = {"selected_effects": ["thermal_lag", "warmup", "bias_instability", "periodic"], "unexplained": {"present": True}}
+    models, units, left_out = greybox_of(body, [run])
+    fitted = models["rate"]["greybox"]["fitted"]
+    assert models["rate"]["greybox"]["params"]["selection"] == "all"
+    assert fitted["spec_"]["tau_e_s"] == pytest.approx(400.0, rel=0.1)
+    assert fitted["spec_"]["tau_w_s"] > 0 and fitted["coef_"]["warmup"] == pytest.approx(0.03, rel=0.1)
+    assert left_out == {"terms": ["thermal_lag", "warmup"], "not_held": ["bias_instability", "periodic"], "not_fitted": [],
+                        "unexplained_structure": True}
