@@ -11,7 +11,6 @@ the child, less sensitive to other load) and of peak resident memory
 
 from __future__ import annotations
 
-import json
 import resource
 import statistics
 import subprocess
@@ -19,12 +18,13 @@ import sys
 import time
 from pathlib import Path
 
+import provenance
+
 import numpy as np
 import pandas as pd
 
 HERE = Path(__file__).resolve().parent
 DATA = HERE / "_data" / "allan_1e7.parquet"
-RESULTS = HERE / "results" / "allan.json"
 N_SAMPLES = 10**7
 FS_HZ = 100.0
 REPEATS = 3
@@ -99,8 +99,7 @@ def main() -> int:
     }
     for key, value in figures.items():
         print(f"{key}: {value}")
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    RESULTS.write_text(json.dumps(figures, indent=2) + "\n")
+    provenance.write("allan", figures)
     return 0
 
 

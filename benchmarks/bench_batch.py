@@ -19,12 +19,13 @@ the load average beside them.
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import tempfile
 import time
 from pathlib import Path
+
+import provenance
 
 N_LOGS = 16
 HERE = Path(__file__).resolve().parent
@@ -114,5 +115,4 @@ if __name__ == "__main__":
     result = main()
     for key, value in result.items():
         print(f"{key:36s} {value:.4g}" if isinstance(value, float) else f"{key:36s} {value}")
-    (HERE / "results").mkdir(exist_ok=True)
-    (HERE / "results" / "batch.json").write_text(json.dumps(result, indent=2) + "\n")
+    provenance.write("batch", result)

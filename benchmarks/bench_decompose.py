@@ -15,17 +15,17 @@ slow thermal trend. Writes ``benchmarks/results/decompose.json``. Pass
 ``--quick`` for 10x smaller sizes. Timings are noisy on a shared machine.
 """
 
-import json
 import sys
 import time
 from pathlib import Path
+
+import provenance
 
 import numpy as np
 
 from gyrocomp.decompose import DecomposeSettings, decompose
 from gyrocomp.decompose.emd import Sifting, emd
 
-OUT = Path(__file__).resolve().parent / "results" / "decompose.json"
 
 
 def signal(n, seed=0):
@@ -81,8 +81,7 @@ def main(quick=False):
     wall, d = timed(lambda: decompose(x, DecomposeSettings(method="iceemdan", ensemble=100), seed=0, workers=2))
     figures["iceemdan100_2workers"] = {"n": n, "wall_s": wall, "modes": len(d.names)}
     print(f"ICEEMDAN-100 n={n}, 2 workers: {wall:.1f} s, {len(d.names)} components", flush=True)
-    OUT.parent.mkdir(exist_ok=True)
-    OUT.write_text(json.dumps(figures, indent=2) + "\n")
+    provenance.write("decompose", figures)
 
 
 if __name__ == "__main__":

@@ -15,10 +15,11 @@ same likelihood on the same number of blocks.
 Writes ``benchmarks/results/diagnose_rate.json``.
 """
 
-import json
 import os
 import time
 from pathlib import Path
+
+import provenance
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
@@ -62,7 +63,7 @@ def main():
     out["cpu_ratio_100_over_2"] = out["100"]["cpu_seconds"] / out["2"]["cpu_seconds"]
     out["load_average"] = os.getloadavg()
     print(f"ratio 100 Hz / 2 Hz: {out['ratio_100_over_2']:.2f} wall, {out['cpu_ratio_100_over_2']:.2f} CPU (goal <= 2)")
-    (HERE / "results" / "diagnose_rate.json").write_text(json.dumps(out, indent=2) + "\n")
+    provenance.write("diagnose_rate", out)
     return 0 if out["ratio_100_over_2"] <= 2.0 else 1
 
 

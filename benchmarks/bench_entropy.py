@@ -11,16 +11,16 @@ kernels are loaded (or, on a fresh checkout, compiled) before timing; that
 one-off cost is reported separately.
 """
 
-import json
 import time
 import tracemalloc
 from pathlib import Path
+
+import provenance
 
 import numpy as np
 
 from gyrocomp.entropy import permutation_entropy, sample_entropy
 
-OUT = Path(__file__).resolve().parent / "results" / "entropy.json"
 
 
 def timed(fn, *args, repeat=1, **kwargs):
@@ -77,8 +77,7 @@ def main():
         results["permutation_entropy"].append(row)
         print(f"PE n=1e6 order {order}: gyrocomp {t_ours:.3f} s, antropy {t_theirs:.3f} s, ratio {row['ratio']:.2f}, "
               f"|diff| {abs(ours - theirs):.1e}", flush=True)
-    OUT.parent.mkdir(exist_ok=True)
-    OUT.write_text(json.dumps(results, indent=2) + "\n")
+    provenance.write("entropy", results)
 
 
 if __name__ == "__main__":

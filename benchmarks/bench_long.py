@@ -41,12 +41,13 @@ import sys
 import time
 from pathlib import Path
 
+import provenance
+
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 DATA = HERE / "_data"
-RESULTS = HERE / "results" / "long.json"
 FS_HZ = 1000.0
 REPEATS = 3
 SEED = 19
@@ -315,10 +316,7 @@ def main(parts: list[str]) -> int:
         found = {"load_average_1min_at_start": os.getloadavg()[0], **known[name]()}
         for key, value in found.items():
             print(f"{key}: {value}", flush=True)
-        results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}  # read late: parts may run side by side
-        results[name] = found
-        RESULTS.parent.mkdir(parents=True, exist_ok=True)
-        RESULTS.write_text(json.dumps(results, indent=2) + "\n")
+        provenance.write("long", found, key=name)  # one entry per part: parts may run side by side
     return 0
 
 

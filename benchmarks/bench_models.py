@@ -14,9 +14,10 @@ while other jobs share the CPU: compare the ratios measured in one run.
 Writes benchmarks/results/models.json.
 """
 
-import json
 import time
 from pathlib import Path
+
+import provenance
 
 import numpy as np
 from sklearn.neural_network import MLPRegressor
@@ -70,8 +71,7 @@ def main():
         mlp_over_elm=mlp5_s / elm_s,
         nsga2elm={"pop_size": 40, "n_gen": 15, "n_samples": 2000, "seconds": nsga_s},
     )
-    (HERE / "results").mkdir(exist_ok=True)
-    (HERE / "results" / "models.json").write_text(json.dumps(results, indent=2) + "\n")
+    provenance.write("models", results)
 
 
 if __name__ == "__main__":

@@ -13,11 +13,12 @@ Timings are noisy while other jobs share the CPU (the ICEEMDAN ensemble
 dominates and scales with the load). Writes benchmarks/results/pipeline.json.
 """
 
-import json
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+import provenance
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -65,5 +66,4 @@ if __name__ == "__main__":
         stages = ", ".join(f"{k} {v:.2f}" for k, v in entry["stages_s"].items())
         print(f"{name:28s} total {entry['total_s']:7.2f} s ({entry['ratio_to_polynomial']:.0f}x polynomial): {stages}")
     print(f"wall {out['wall_s']:.1f} s, scoring and report {out['scoring_and_report_s']:.1f} s")
-    (HERE / "results").mkdir(exist_ok=True)
-    (HERE / "results" / "pipeline.json").write_text(json.dumps(out, indent=2) + "\n")
+    provenance.write("pipeline", out)

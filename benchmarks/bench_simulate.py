@@ -13,9 +13,10 @@ Timings are noisy on a shared machine; compare ratios measured in one run.
 Writes benchmarks/results/simulate.json.
 """
 
-import json
 import time
 from pathlib import Path
+
+import provenance
 
 import allantools.noise as an
 import numpy as np
@@ -77,8 +78,7 @@ def main():
         "noise_speedup_vs_allantools": theirs / ours,
         "note": "best of 3 on a machine shared with other jobs; compare the ratios",
     }
-    (HERE / "results").mkdir(exist_ok=True)
-    (HERE / "results" / "simulate.json").write_text(json.dumps(results, indent=2) + "\n")
+    provenance.write("simulate", results)
 
 
 if __name__ == "__main__":

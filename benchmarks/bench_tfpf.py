@@ -11,16 +11,16 @@ Writes ``results/tfpf.json``; timings on a shared machine are noisy,
 the ratio much less so.
 """
 
-import json
 import time
 from pathlib import Path
+
+import provenance
 
 import numpy as np
 
 from gyrocomp.denoise import savgol, tfpf
 from gyrocomp.denoise.tfpf import _BLOCK
 
-OUT = Path(__file__).resolve().parent / "results" / "tfpf.json"
 GOAL_RATIO = 10.0
 
 
@@ -62,10 +62,9 @@ def main():
     core = _fft_core(n, 101)
     ratio = rows[1]["seconds"] / core
     print(f"FFT core n=1e5 window 101: {core:.2f} s; TFPF / core {ratio:.2f} (goal <= {GOAL_RATIO})")
-    OUT.parent.mkdir(exist_ok=True)
     result = {"tfpf": rows, "savgol": sg, "fft_core_101_s": core, "ratio_tfpf_101_to_core": ratio,
               "goal": f"ratio_tfpf_101_to_core <= {GOAL_RATIO}", "met": bool(ratio <= GOAL_RATIO)}
-    OUT.write_text(json.dumps(result, indent=2) + "\n")
+    provenance.write("tfpf", result)
     return 0 if ratio <= GOAL_RATIO else 1
 
 

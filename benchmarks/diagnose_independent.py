@@ -22,9 +22,10 @@ Goals (issue 16, "Done when"): >= 95 % / 90 % / 90 % on sim forms / real forms
 effect-free pairs; the 100 Hz twin at most twice its 2 Hz twin's time (both
 timed back to back in one worker) and a 2 Hz pair under a minute.
 
-Writes ``benchmarks/results/diagnose-independent-seed<S>.json`` (summary,
-confusion matrix, every case with its truth and verdict) and ``.md`` (the
-summary as tables). Exits 1 while a goal is missed.
+Writes the summary to ``benchmarks/results/diagnose_independent.json`` (one
+entry per seed, with the commit, machine and load) and
+``benchmarks/_data/independent/seed<S>.json`` (summary, confusion matrix,
+every case with its truth and verdict) and ``.md`` (the summary as tables). Exits 1 while a goal is missed.
 
 Each verdict is also appended to ``benchmarks/_data/independent/seed<S>-progress.jsonl``
 as it comes; ``--resume`` keeps those and runs the rest.
@@ -54,6 +55,7 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import independent_gen as gen  # noqa: E402
+import provenance  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -292,10 +294,10 @@ def main(argv=None):
     text = markdown(summary, results, args.seed)
     print(text)
     print(f"wall time {wall:.0f} s on {args.workers} workers")
-    out = HERE / "results" / f"diagnose-independent-seed{args.seed}"
-    out.parent.mkdir(exist_ok=True)
-    Path(f"{out}{suffix}.json").write_text(json.dumps({"summary": summary, "cases": results}, indent=1, default=float) + "\n")
-    Path(f"{out}{suffix}.md").write_text(text)
+    out = DATA / f"seed{args.seed}{suffix}"
+    Path(f"{out}.json").write_text(json.dumps({"summary": summary, "cases": results}, indent=1, default=float) + "\n")
+    Path(f"{out}.md").write_text(text)
+    provenance.write("diagnose_independent", {"summary": {k: v for k, v in summary.items() if k != "commit"}}, key=f"{args.seed}{suffix}")
     return 0 if goals_met(summary) else 1
 
 

@@ -33,7 +33,9 @@ rate; only the temperature-sensor noise differs); its threshold is diagnose's
 ``k ln(2 n_blocks) + bic_margin``, where a sinusoid's ``k`` counts its
 amplitude and phase once per run (each run re-estimates them).
 
-Prints and writes ``benchmarks/results/diagnose[-absolute][-seedS].json``
+Prints and writes the summary to ``benchmarks/results/diagnose_withheld.json``
+(one entry per seed and draw, with the commit, machine and load) and every
+case to ``benchmarks/_data/diagnose_withheld/<seed>[-absolute].json``
 (seed 2024 unsuffixed): the confusion matrix (rows: true effect present,
 columns: effect selected), the exact-match rate (overall and on pairs
 above the edge), false positives on effect-free pairs, the held-out gap
@@ -416,10 +418,11 @@ def main(argv=None):
     for key, value in summary.items():
         if key != "confusion":
             print(f"{key}: {value}")
-    name = "diagnose" + ("-absolute" if args.draw == "absolute" else "") + ("" if args.seed == 2024 else f"-seed{args.seed}")
-    out = HERE / "results" / f"{name}.json"
-    out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps({"summary": summary, "cases": results}, indent=2, default=float) + "\n")
+    import provenance  # benchmarks/ is on the path when this runs as a script
+
+    key = f"{args.seed}" + ("-absolute" if args.draw == "absolute" else "")
+    provenance.detail_path(f"diagnose_withheld/{key}.json").write_text(json.dumps({"summary": summary, "cases": results}, indent=2, default=float) + "\n")
+    provenance.write("diagnose_withheld", {"summary": summary}, key=key)
     rate = summary["exact_match_rate"] if args.draw == "edge" else summary["exact_match_rate_above_edge"]
     return 0 if (rate or 0.0) >= 0.95 and summary["false_positive_pairs"] == 0 else 1
 

@@ -57,8 +57,10 @@ the same fit on inputs multiplied by ``1 + 1e-12 u``, u uniform in
 change, and the relative change of the held-out RMSE of the pick and of
 the default ELM.
 
-Writes ``benchmarks/results/nsga2elm_pick.json`` (every run, ratio
-quantiles per problem and seed set, stability). One process, one BLAS
+Writes every run, ratio quantiles per problem and seed set, and stability to
+``benchmarks/_data/nsga2elm_pick.json`` (``--out``), and the same without the
+per-fit runs, with the commit, machine and load, to
+``benchmarks/results/nsga2elm_pick.json``. One process, one BLAS
 thread; run it under ``nice``.
 """
 
@@ -76,6 +78,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import numpy as np  # noqa: E402
+
+import provenance  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -251,7 +255,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--stability", type=int, default=5, metavar="N",
                         help="refit the first N tuning seeds per problem on inputs changed by 1e-12 relative (0: skip; "
                              "fitted here unchanged first when the tuning set is not run)")
-    parser.add_argument("--out", type=Path, default=HERE / "results" / "nsga2elm_pick.json")
+    parser.add_argument("--out", type=Path, default=HERE / "_data" / "nsga2elm_pick.json")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="override a [nsga2elm] setting, e.g. rmse_tolerance=1e9 accept=always (the whole-front knee)")
     args = parser.parse_args(argv)
@@ -309,6 +313,15 @@ def _write(path: Path, result: dict) -> None:
     tmp = path.with_suffix(".tmp")
     tmp.write_text(json.dumps(result, indent=1) + "\n")
     tmp.replace(path)
+    provenance.write("nsga2elm_pick", _summary(result))
+
+
+def _summary(result: dict) -> dict:
+    """`result` without the per-fit runs (each set's ``summary`` stays), earlier records likewise."""
+    out = {**result, "sets": {k: {kk: vv for kk, vv in v.items() if kk != "runs"} for k, v in result.get("sets", {}).items()}}
+    if "earlier" in result:
+        out["earlier"] = [_summary(e) for e in result["earlier"]]
+    return out
 
 
 if __name__ == "__main__":

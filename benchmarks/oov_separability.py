@@ -28,7 +28,8 @@ independently of what the diagnosis selected:
 The likelihood is that of the diagnosis (:mod:`gyrocomp.effects.likelihood`)
 on at most 240 merged blocks per run (the signature's ``max_blocks``).
 
-Writes ``benchmarks/results/oov-separability.json`` and ``.md``.
+Writes ``benchmarks/results/oov_separability.json`` (with the commit, machine and
+load) and the table as ``benchmarks/_data/oov_separability.md``.
 
 Usage: ``python benchmarks/oov_separability.py --seeds 1010 1011 ... [--draws 60] [--workers 2]``
 """
@@ -54,6 +55,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 
 import independent_gen as gen  # noqa: E402
+import provenance  # noqa: E402
 from gyrocomp.diagnose import problems  # noqa: E402
 from gyrocomp.effects.likelihood import fit_noise, merge_blocks  # noqa: E402
 from gyrocomp.diagnose.select import extend, fit_baseline  # noqa: E402
@@ -161,13 +163,12 @@ def main(argv=None):
     ap.add_argument("--seeds", type=int, nargs="+", required=True)
     ap.add_argument("--draws", type=int, default=60)
     ap.add_argument("--workers", type=int, default=1)
-    ap.add_argument("--out", type=Path, default=HERE / "results" / "oov-separability")
     args = ap.parse_args(argv)
     cases = [c for s in args.seeds for c in gen.case_plan(s) if c["key"] in KINDS]
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(measure, cases, [args.draws] * len(cases)))
-    args.out.with_suffix(".json").write_text(json.dumps({"seeds": args.seeds, "draws": args.draws, "cases": results}, indent=1) + "\n")
-    args.out.with_suffix(".md").write_text(
+    provenance.write("oov_separability", {"seeds": args.seeds, "draws": args.draws, "cases": results})
+    provenance.detail_path("oov_separability.md").write_text(
         f"# Separability of the hard out-of-vocabulary kinds (seeds {', '.join(map(str, args.seeds))}; {args.draws} draws)\n\n"
         + table(results))
     print(table(results))

@@ -2,7 +2,8 @@
 
 Each benchmark is a script that measures gyrocomp against its reference
 library in the same run, prints its figures and writes them to
-``benchmarks/results/<name>.json``; ``benchmarks/README.md`` quotes them.
+``benchmarks/results/<name>.json`` with its provenance (``provenance.py``);
+``docs/validation.md`` quotes them.
 Pass names to run a subset: ``python benchmarks/run.py allan decompose``.
 """
 

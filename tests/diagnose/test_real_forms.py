@@ -142,7 +142,7 @@ def test_a_play_hysteresis_is_one_hysteresis_not_a_random_walk():
 
     Fitted as a relay, the play leaves its ramps between the branches, slow
     structure a random walk absorbed better than the relay explained it
-    (the benchmark history is in benchmarks/results/diagnose-ledger.md).
+    (the benchmark history is in benchmarks/LEDGER.md).
     """
     t, temperature, measured, _, rng = _oven(6)
     amplitude = 0.01

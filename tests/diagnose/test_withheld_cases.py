@@ -6,7 +6,7 @@ and must be diagnosed exactly, with the held-out gap at least halved. The
 set holds look-alikes near the edge of detectability (thermal lag beside
 temperature-rate sensitivity, hysteresis or a warm-up beside a noise term,
 flicker alone just above its edge) and pairs of a slow shape beside a noise
-term. What each case once exposed is in ``benchmarks/results/diagnose-ledger.md``;
+term. What each case once exposed is in ``benchmarks/LEDGER.md``;
 the rules of the selection are tested on constructed cases in
 ``test_selection_rules.py``.
 """
@@ -55,7 +55,7 @@ def test_look_alikes_near_the_edge(seed, index, strength):
 _BELOW_LIMIT = pytest.mark.xfail(
     strict=False,
     reason="fails since 840e5ab (hysteresis' power-on level per run): its hysteresis, drawn below the detection limit the report "
-           "states beside the noise term, no longer pays; benchmarks/results/diagnose-ledger.md, "
+           "states beside the noise term, no longer pays; benchmarks/LEDGER.md, "
            "withheld row of 2026-11-23 17:40")
 
 
