@@ -41,14 +41,10 @@ from __future__ import annotations
 
 import dataclasses
 import fnmatch
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gyrocomp.errors import InputError
-
-if TYPE_CHECKING:
-    from gyrocomp.recordings import ColumnSpec
 
 __all__ = ["read_log", "read_logs"]
 
@@ -73,7 +69,7 @@ class _Stream:
     units: dict
 
 
-def read_log(name: str, kind: str, spec: ColumnSpec) -> tuple[dict[str, np.ndarray], ColumnSpec]:
+def read_log(name: str, kind: str, spec) -> tuple:
     """The columns of the one stream `spec` selects, and `spec` resolved for them.
 
     As :func:`read_logs`, for a caller that takes one time base.
@@ -104,7 +100,7 @@ def read_log(name: str, kind: str, spec: ColumnSpec) -> tuple[dict[str, np.ndarr
     return columns, resolved
 
 
-def read_logs(name: str, kind: str, spec: ColumnSpec) -> list[tuple[str, dict[str, np.ndarray], ColumnSpec]]:
+def read_logs(name: str, kind: str, spec) -> list[tuple]:
     """The columns of every stream `spec` selects, each with its own time stamps, and `spec` resolved for each.
 
     Parameters
@@ -112,8 +108,9 @@ def read_logs(name: str, kind: str, spec: ColumnSpec) -> list[tuple[str, dict[st
     name : str
         Path of the log.
     kind : {"ulog", "dataflash"}
-    spec : ColumnSpec
-        The column options; the default ``rate`` selects the first gyro, the
+    spec : gyrocomp.recordings.ColumnSpec
+        The column options (not imported here: :mod:`gyrocomp.recordings`
+        imports this module); the default ``rate`` selects the first gyro, the
         default ``temperature`` each chosen stream's own temperature (an
         explicit one is looked up in each stream's columns).
 

@@ -34,6 +34,7 @@ from gyrocomp.allan import ieee952
 
 __all__ = [
     "save",
+    "method_label",
     "drift_figure",
     "components_figure",
     "classes_figure",
@@ -277,10 +278,18 @@ def _draw_entropies(fig, entries, settings) -> None:
     ax.legend(loc="upper right", fontsize="small")
 
 
+def method_label(row: dict, with_axis: bool = False) -> str:
+    """``method (mode)`` of a ``run`` report row, followed by ``[axis]`` when `with_axis` (a report of several axes).
+
+    The one label of a method in ``report.md`` (:mod:`gyrocomp.pipeline.report`)
+    and ``report.png``.
+    """
+    label = row["method"] if row["mode"] is None else f"{row['method']} ({row['mode']})"
+    return f"{label} [{row['axis']}]" if with_axis and row.get("axis") is not None else label
+
+
 def report_figure(report: dict):
     """``run``'s report: Allan deviation, 100 s means over time and signal survival, one panel each."""
-    from gyrocomp.pipeline.report import method_label
-
     several = len(report.get("axes", ())) > 1
     fig = _figure(17.0, 5.2)
     axes = fig.subplots(1, 3)
@@ -311,7 +320,7 @@ def report_figure(report: dict):
 
 def gap_figure(report: dict):
     """``diagnose``: residual RMS by regime and ADEV ratio by tau, baseline against selected, one row per run."""
-    from gyrocomp.diagnose.report import _fmt
+    from gyrocomp.diagnose.report import format_value
 
     runs = [r for r in ("fit", "holdout") if r in report["localization"]]
     fig = _figure(12.0, 4.0 * len(runs))
@@ -335,7 +344,7 @@ def gap_figure(report: dict):
         row[1].axhline(1.0, color="k", lw=0.8)
         row[1].set_xlabel("tau [s]")
         row[1].set_ylabel("ADEV residual / ADEV simulation")
-        row[1].set_title(f"{run}: gap by timescale (gap {_fmt(report['gap']['baseline'][run])} -> {_fmt(report['gap']['selected'][run])})")
+        row[1].set_title(f"{run}: gap by timescale (gap {format_value(report['gap']['baseline'][run])} -> {format_value(report['gap']['selected'][run])})")
         row[1].legend(fontsize=8)
     return fig
 

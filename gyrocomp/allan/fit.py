@@ -10,14 +10,10 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gyrocomp.allan import ieee952
-
-if TYPE_CHECKING:
-    from gyrocomp.allan.analysis import AllanConfig
 
 __all__ = ["fit_terms", "add_readoffs"]
 
@@ -90,7 +86,7 @@ def _nnls_subsets(a: np.ndarray, b: np.ndarray):
     return coef, active, np.linalg.inv(sub.T @ sub), chi2
 
 
-def add_readoffs(terms: dict, tau: np.ndarray, adev: np.ndarray, settings: AllanConfig) -> None:
+def add_readoffs(terms: dict, tau: np.ndarray, adev: np.ndarray, settings) -> None:
     """Classic IEEE 952 read-offs: N on the -1/2 line at 1 s, K on the +1/2 line at 3 s, B = minimum / 0.664.
 
     B uses the first local minimum of the curve (the flicker floor before
@@ -104,6 +100,10 @@ def add_readoffs(terms: dict, tau: np.ndarray, adev: np.ndarray, settings: Allan
     ``None`` and ``readoff_note`` says so: a denoised recording, whose curve
     rises first and falls as tau^(-1/2) only at thousands of seconds, has no
     angle random walk to read, though a -1/2 stretch exists far above 1 s.
+
+    `settings` is the analysis' :class:`~gyrocomp.allan.analysis.AllanConfig`
+    (its ``arw_tau_s``, ``rrw_tau_s``, ``slope_tolerance`` and
+    ``bias_factor``); it is not imported here, which would close a cycle.
     """
     rising = np.flatnonzero(np.diff(adev) > 0)
     i = int(rising[0]) if rising.size else len(adev) - 1

@@ -71,7 +71,7 @@ class Job:
         (as absolute paths), and the settings hold their SHA-256.
     preload : tuple of str
         Modules the stage imports; worker processes import them before
-        the first input arrives (:func:`gyrocomp.batch.backends.run_local`).
+        the first input arrives (:func:`gyrocomp.workers.run_local`).
     paired : tuple of (str, str)
         ``(option, flag)`` of the options that name a second recording per
         input (:func:`paired_path`); its content is part of what makes a

@@ -210,7 +210,7 @@ def train_axes(recording, config: dict, *, source: str, seed: int | None, worker
     by segments :func:`~gyrocomp.pipeline.train.train_parallel_segments`)
     with the same seed, so the models do not depend on `workers`.
     """
-    from gyrocomp.batch.backends import run_local
+    from gyrocomp.workers import run_local
 
     tasks = [
         {"axis": name, "recording": recording.axis(name), "config": config, "source": source, "seed": seed, "bounds": list(recording.segments)}

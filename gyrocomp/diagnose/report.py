@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from gyrocomp.artefacts import artefact_header
 
-__all__ = ["to_json", "to_markdown", "summary_table"]
+__all__ = ["to_json", "to_markdown", "summary_table", "format_value"]
 
 
 def to_json(body: dict, *, inputs: list, settings: dict) -> dict:
@@ -34,7 +34,7 @@ def to_markdown(report: dict) -> str:
     lines += ["", "| model | gap fit | gap holdout |", "|---|---|---|"]
     for name in ("baseline", "selected"):
         g = report["gap"][name]
-        lines.append(f"| {name} | {_fmt(g['fit'])} | {_fmt(g['holdout'])} |")
+        lines.append(f"| {name} | {format_value(g['fit'])} | {format_value(g['holdout'])} |")
     lines.append("| sampling noise (95 %) | {} | {} |".format(*_noise_levels(report)))
     protocol = report["gap"].get("protocol")
     if protocol:
@@ -47,16 +47,16 @@ def to_markdown(report: dict) -> str:
         "|---|---|---|---|---|---|",
     ]
     for effect, c in report["candidates"].items():
-        params = ", ".join(f"{k} = {_fmt(v['value'])} {v['unit']}" for k, v in c["params"].items())
+        params = ", ".join(f"{k} = {format_value(v['value'])} {v['unit']}" for k, v in c["params"].items())
         lines.append(
-            f"| `{effect}` | {_fmt(c['gap_fit'])} | {_fmt(c['gap_holdout'])} | {_fmt(c['delta_bic'])} | {params} "
+            f"| `{effect}` | {format_value(c['gap_fit'])} | {format_value(c['gap_holdout'])} | {format_value(c['delta_bic'])} | {params} "
             f"| {_limit(effect, c, sel)} |"
         )
     power = report.get("settings", {}).get("detection_power")
     lines += [
         "",
         "Detection limit: for an effect not selected, the weakest amplitude (thermal lag: time constant) "
-        f"an ideal detector would find beside the selected model with probability {_fmt(power)}.",
+        f"an ideal detector would find beside the selected model with probability {format_value(power)}.",
     ]
     if report.get("skipped"):
         lines += ["", "Skipped:"] + [f"- `{e}`: {why}" for e, why in report["skipped"].items()]
@@ -66,7 +66,7 @@ def to_markdown(report: dict) -> str:
         base, selected = loc["baseline"]["regime"], loc["selected"]["regime"]
         for regime, v in base.items():
             after = selected.get(regime, {}).get("rms_deg_h")
-            lines.append(f"| {regime} | {_fmt(v['rms_deg_h'])} | {_fmt(after)} | {_fmt(v['expected_rms_deg_h'])} |")
+            lines.append(f"| {regime} | {format_value(v['rms_deg_h'])} | {format_value(after)} | {format_value(v['expected_rms_deg_h'])} |")
     lines.append("")
     lines.append(report.get("gap_definition", ""))
     return "\n".join(lines) + "\n"
@@ -86,11 +86,11 @@ def summary_table(report: dict):
         table.add_column(col, justify="left" if col in ("model / candidate", "detection limit") else "right")
     for name in ("baseline", "selected"):
         g = report["gap"][name]
-        table.add_row(name, _fmt(g["fit"]), _fmt(g["holdout"]), "", "")
+        table.add_row(name, format_value(g["fit"]), format_value(g["holdout"]), "", "")
     table.add_row("sampling noise (95 %)", *_noise_levels(report), "", "")
     for effect, c in report["candidates"].items():
         mark = " *" if effect in sel else ""
-        table.add_row(f"+ {effect}{mark}", _fmt(c["gap_fit"]), _fmt(c["gap_holdout"]), _fmt(c["delta_bic"]), _limit(effect, c, sel))
+        table.add_row(f"+ {effect}{mark}", format_value(c["gap_fit"]), format_value(c["gap_holdout"]), format_value(c["delta_bic"]), _limit(effect, c, sel))
     return table
 
 
@@ -111,7 +111,7 @@ def _size_words(un):
     parts = []
     for run, v in un.get("size", {}).items():
         share = v.get("share_of_gap")
-        parts.append(f"{run}: rms {_fmt(v['rms_deg_h'])} deg/h" + (f", {100 * share:.0f} % of the gap" if share is not None else ""))
+        parts.append(f"{run}: rms {format_value(v['rms_deg_h'])} deg/h" + (f", {100 * share:.0f} % of the gap" if share is not None else ""))
     return "unexplained part " + "; ".join(parts)
 
 
@@ -134,7 +134,7 @@ def _unexplained_lines(report):
 def _noise_levels(report):
     """The selected model's gap ``noise_level`` on the fit and holdout runs, formatted (None where absent)."""
     parts = report["gap"]["selected"]["parts"]
-    return tuple(_fmt(parts[run]["noise_level"] if run in parts else None) for run in ("fit", "holdout"))
+    return tuple(format_value(parts[run]["noise_level"] if run in parts else None) for run in ("fit", "holdout"))
 
 
 def _limit(effect, candidate, selected):
@@ -144,10 +144,11 @@ def _limit(effect, candidate, selected):
     limit = candidate.get("detection_limit")
     if not limit:
         return "beyond search range"
-    return ", ".join(f"{k} >= {_fmt(v['value'])} {v['unit']}" for k, v in limit.items())
+    return ", ".join(f"{k} >= {format_value(v['value'])} {v['unit']}" for k, v in limit.items())
 
 
-def _fmt(v):
+def format_value(v):
+    """A report number for tables and titles: ``-`` for None, 3 significant digits when very large or small, else 3 decimals."""
     if v is None:
         return "-"
     if isinstance(v, float) and (abs(v) >= 1e4 or (v != 0 and abs(v) < 1e-3)):

@@ -13,8 +13,9 @@ import os
 from pathlib import Path
 
 from gyrocomp import artefacts
+from gyrocomp.plots import method_label
 
-__all__ = ["BASELINE", "findings", "write", "markdown", "method_label"]
+__all__ = ["BASELINE", "findings", "write", "markdown"]
 
 BASELINE = "polynomial"
 """The method every other one is compared with (DESIGN.md, "Honest evaluation")."""
@@ -139,12 +140,6 @@ def markdown(report: dict) -> str:
             lines.append(f"| {_method_cell({'method': method['name'], 'axis': method.get('axis')}, several)} | {stage} | {seconds:.2f} |")
     lines += ["", f"Total: {report.get('total_time_s', float('nan')):.1f} s.", ""]
     return "\n".join(lines)
-
-
-def method_label(row: dict, with_axis: bool = False) -> str:
-    """``method (mode)``, followed by ``[axis]`` when `with_axis` (a report of several axes)."""
-    label = row["method"] if row["mode"] is None else f"{row['method']} ({row['mode']})"
-    return f"{label} [{row['axis']}]" if with_axis and row.get("axis") is not None else label
 
 
 def _method_cell(row: dict, several: bool) -> str:
