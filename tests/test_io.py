@@ -231,3 +231,21 @@ def test_minor_version_is_accepted(tmp_path):
     obj = artefacts.artefact_header("gyrocomp.model", version="1.7")
     artefacts.write_json(path, obj)
     assert artefacts.read_json(path, "gyrocomp.model")["schema"]["version"] == "1.7"
+
+
+def test_write_table_takes_a_mapping_of_columns_as_a_frame(tmp_path):
+    """A mapping of columns writes the same Parquet table as the DataFrame of it, and the same CSV."""
+    import pyarrow.parquet as pq
+
+    rng = np.random.default_rng(2)
+    columns = {"time": np.arange(50) / 10.0, "rate": rng.standard_normal(50), "flag": np.arange(50) % 3,
+               "strided": rng.standard_normal(100)[::2]}
+    header = artefacts.artefact_header("gyrocomp.recording")
+    artefacts.write_table(tmp_path / "a.parquet", columns, header)
+    artefacts.write_table(tmp_path / "b.parquet", pd.DataFrame(columns), header)
+    a, b = pq.read_table(tmp_path / "a.parquet"), pq.read_table(tmp_path / "b.parquet")
+    assert a.schema.names == b.schema.names and a.schema.metadata == b.schema.metadata
+    assert a.equals(b)
+    artefacts.write_table(tmp_path / "a.csv", columns, header)
+    artefacts.write_table(tmp_path / "b.csv", pd.DataFrame(columns), header)
+    assert (tmp_path / "a.csv").read_text() == (tmp_path / "b.csv").read_text()

@@ -137,7 +137,7 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
     from gyrocomp.decompose import SIDECAR_SCHEMA, component_stats, decompose
 
     result = decompose(recording.rate_dps, settings, seed=seed, workers=workers, callback=progress)
-    frame, header = table(recording, result, settings, seed)
+    frame, header = _columns(recording, result, settings, seed)
     sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=header["inputs"], settings=header["settings"], seed=seed)
     sidecar.update(method=settings.method, fs_hz=recording.fs_hz, **component_stats(result, recording.fs_hz))
     artefacts.write_table(out, frame, header)
@@ -146,20 +146,25 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
 
 
 def table(recording, result, settings, seed: int):
-    """The ``components.parquet`` table of a decomposition and its header (see :func:`write`)."""
+    """The ``components.parquet`` table of a decomposition (a DataFrame) and its header (see :func:`write`)."""
     import pandas as pd
 
+    columns, header = _columns(recording, result, settings, seed)
+    return pd.DataFrame(columns), header
+
+
+def _columns(recording, result, settings, seed: int):
+    """The columns of :func:`table` by name, in order, and its header (no pandas: :func:`write` stays light)."""
     from gyrocomp import artefacts
     from gyrocomp.config import settings_dict
 
-    frame = pd.DataFrame({"time": recording.time_s, "rate": recording.rate_dps})
+    columns = {"time": recording.time_s, "rate": recording.rate_dps}
     if recording.temperature_c is not None:
-        frame["temperature"] = recording.temperature_c
-    for name, values in zip(result.names, result.components):
-        frame[name] = values
+        columns["temperature"] = recording.temperature_c
+    columns.update(zip(result.names, result.components))
     header = artefacts.artefact_header("gyrocomp.components", inputs=[recording.input_record()], settings=settings_dict(settings), seed=seed)
     header.update(components=list(result.names), fs_hz=recording.fs_hz, axis=recording.axes[0].name, unit=recording.axes[0].unit)
-    return frame, header
+    return columns, header
 
 
 def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers: int = 1, progress: Callable[[int, int], None] | None = None):
@@ -194,8 +199,6 @@ def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, wo
         By axis name, in the recording's order.
     sidecar : dict
     """
-    import pandas as pd
-
     from gyrocomp import artefacts
     from gyrocomp.config import settings_dict
     from gyrocomp.decompose import SIDECAR_SCHEMA, component_stats, decompose
@@ -215,12 +218,11 @@ def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, wo
         stats[axis.name] = component_stats(result, recording.fs_hz)
         for entry, name in zip(stats[axis.name]["components"], names):
             entry["name"] = name
-    frame = pd.DataFrame(columns)
     header = artefacts.artefact_header("gyrocomp.components", inputs=[recording.input_record()], settings=settings_dict(settings), seed=seed)
     header.update(components=[n for a in axes.values() for n in a["components"]], fs_hz=recording.fs_hz, axes=axes)
     sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=header["inputs"], settings=header["settings"], seed=seed)
     sidecar.update(method=settings.method, fs_hz=recording.fs_hz, axes=stats)
-    artefacts.write_table(out, frame, header)
+    artefacts.write_table(out, columns, header)
     artefacts.write_json(Path(out).with_suffix(".json"), sidecar)
     return results, sidecar
 

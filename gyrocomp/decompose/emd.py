@@ -37,7 +37,6 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy.linalg.lapack import dgtsv
 
 __all__ = ["Sifting", "emd", "sift", "local_mean", "count_extrema"]
 
@@ -507,6 +506,8 @@ def _splines(knots, n):
     diag[e2], lower[e2 - 1], rhs[e2] = 1.0, 0.0, slope[s2]
     upper[end[:-1]] = 0.0
     lower[end[:-1]] = 0.0
+    from scipy.linalg.lapack import dgtsv  # the numpy path only: the compiled one solves in its kernel
+
     s = dgtsv(lower, diag, upper, rhs, 1, 1, 1, 1)[3]
     s0, s1 = s[:-1], s[1:]
     c2 = (3.0 * slope - 2.0 * s0 - s1) / h
