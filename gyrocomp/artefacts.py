@@ -17,6 +17,8 @@ import json
 import math
 import os
 import re
+import shutil
+import stat
 import sys
 import tempfile
 from pathlib import Path
@@ -247,17 +249,35 @@ def _line_of(raw: bytes, token: str | None) -> int | None:
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[str]:
-    """Yield a temporary path beside `path`; on success rename it onto `path`.
+    """Yield a temporary path for `path`; on success put what was written there onto `path`.
 
-    The parent folder is created. If the body raises, the temporary file is
-    removed and `path` is left as it was.
+    Only a regular file (or a new path) is replaced atomically: a temporary
+    file beside it is renamed onto it, and the parent folder is created. A
+    symbolic link is followed to its target, which is then written the same
+    way (the link stays). A character device or a FIFO (``/dev/null``,
+    ``/dev/stdout``, a named pipe) is never replaced: the bytes are written
+    into it once the body has finished. If the body raises, the temporary
+    file is removed and `path` is left as it was.
+
+    Raises
+    ------
+    InputError
+        `path` is a folder, a socket or a block device.
     """
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    target = Path(os.path.realpath(path))
+    kind = _output_kind(path, target)
+    folder = target.parent if kind == "file" else None
+    if folder is not None:
+        folder.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
     os.close(fd)
     try:
         yield tmp
+        if kind == "stream":
+            with open(tmp, "rb") as source, open(target, "wb") as sink:
+                shutil.copyfileobj(source, sink)
+            os.unlink(tmp)
+            return
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.chmod(tmp, 0o666 & ~_umask())
@@ -266,6 +286,20 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def _output_kind(path: str | os.PathLike, target: Path) -> str:
+    """``"file"`` (a regular file or a new path) or ``"stream"`` (a character device or FIFO) for an output `path` resolving to `target`."""
+    try:
+        mode = os.stat(target).st_mode
+    except FileNotFoundError:
+        return "file"
+    if stat.S_ISREG(mode):
+        return "file"
+    if stat.S_ISCHR(mode) or stat.S_ISFIFO(mode):
+        return "stream"
+    what = "a directory" if stat.S_ISDIR(mode) else "a socket" if stat.S_ISSOCK(mode) else "a block device"
+    raise InputError(f"{os.fspath(path)}: is {what}, expected a file to write")
 
 
 def artefact_header(

@@ -58,6 +58,7 @@ __all__ = [
     "PLAUSIBLE_DEGC",
     "read_recording",
     "read_recordings",
+    "check_distinct",
     "recording_from_frame",
     "RATE_UNITS",
     "ACCELERATION_UNITS",
@@ -586,6 +587,28 @@ def read_recordings(path: str | os.PathLike, columns: ColumnSpec = ColumnSpec(),
     ]
 
 
+def check_distinct(runs: Sequence[Recording]) -> None:
+    """Refuse two runs with the same bytes among recordings that must be different runs (a fit run and its held-out ones).
+
+    A held-out figure is only one when its run took no part in the fit: the
+    same file given twice, or a byte-identical copy of it, would report the
+    fit as held out. Compared by content (:attr:`Recording.sha256`), so a
+    path, a link or a copy are all caught.
+
+    Raises
+    ------
+    InputError
+        Naming both files and the shared digest (exit 2).
+    """
+    seen: dict[str, Recording] = {}
+    for run in runs:
+        first = seen.setdefault(run.sha256, run)
+        if first is not run:
+            raise InputError(
+                f"{run.name}: the same bytes as {first.name} (SHA-256 {run.sha256[:12]}...); a held-out run must be another recording"
+            )
+
+
 def recording_from_frame(
     frame: pd.DataFrame | Mapping[str, np.ndarray],
     *,
@@ -775,11 +798,35 @@ def _has_columns(have: Sequence[str], spec: ColumnSpec) -> bool:
 def _parse_csv(name: str, source: str | bytes, spec: ColumnSpec) -> pd.DataFrame:
     import pandas as pd
 
-    compression = "infer"
+    with csv_errors(name), open_csv_source(name, source) as stream:
+        return pd.read_csv(stream, compression=None, **csv_options(spec))
+
+
+@contextlib.contextmanager
+def open_csv_source(name: str, source: str | bytes | None = None):
+    """What ``pandas.read_csv`` reads for a CSV recording: the file, its checked decompressed stream (:func:`gyrocomp.compressed.open_csv`), or `source` bytes.
+
+    Both CSV readers (this module's and :mod:`gyrocomp.streaming`'s) read
+    through it, so a compressed file is decompressed, bounded and checked
+    for truncation the same way by both.
+    """
+    from gyrocomp import compressed
+
     if isinstance(source, bytes):
-        source, compression = _stdio.BytesIO(source), None
-    with csv_errors(name):
-        return pd.read_csv(source, compression=compression, **csv_options(spec))
+        yield _stdio.BytesIO(source)
+    elif compressed.is_compressed(name):
+        with compressed.open_csv(name, file_limits()) as stream:
+            yield stream
+    else:
+        yield name
+
+
+def file_limits():
+    """The bounds of a compressed recording (:class:`gyrocomp.compressed.FileLimits`, ``configs/recordings.toml`` ``[files]``)."""
+    from gyrocomp import compressed
+    from gyrocomp.config import bind, load_config
+
+    return bind(compressed.FileLimits, load_config("recordings").get("files"), "recordings.toml [files]")
 
 
 def csv_options(spec: ColumnSpec) -> dict:
@@ -815,6 +862,8 @@ def csv_errors(name: str) -> Iterator[None]:
         with warnings.catch_warnings():
             warnings.simplefilter("error", pd.errors.ParserWarning)
             yield
+    except InputError:  # a compressed stream's own check (gyrocomp.compressed), already one line naming the file
+        raise
     except pd.errors.EmptyDataError:
         raise InputError(f"{name}: file is empty") from None
     except pd.errors.ParserError as err:

@@ -25,6 +25,7 @@ units count from each chunk's first stamp.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import sys
@@ -169,14 +170,17 @@ class ChunkReader:
     def _csv_frames(self):
         import pandas as pd
 
-        source = _HashingReader(sys.stdin.buffer, self._hash) if self.name == "-" else self.name
         wanted = recordings.wanted_columns(self.columns, self.usecols)
-        with recordings.csv_errors(self.name):
-            reader = pd.read_csv(
-                source, compression=None if self.name == "-" else "infer", chunksize=self.rows,
-                **recordings.csv_options(self.columns),
-            )
-        with reader:
+        with contextlib.ExitStack() as stack:
+            if self.name == "-":
+                source = _HashingReader(sys.stdin.buffer, self._hash)
+            else:
+                with recordings.csv_errors(self.name):
+                    source = stack.enter_context(recordings.open_csv_source(self.name))
+            with recordings.csv_errors(self.name):
+                reader = stack.enter_context(
+                    pd.read_csv(source, compression=None, chunksize=self.rows, **recordings.csv_options(self.columns))
+                )
             while True:
                 with recordings.csv_errors(self.name):  # each chunk's rows checked as the whole-file reader checks them
                     frame = next(reader, None)
@@ -231,11 +235,12 @@ def _text_time(name: str, kind: str, columns: ColumnSpec) -> bool:
 
     sep = recordings._SEPARATOR_WORDS.get(columns.sep, columns.sep)
     try:
-        head = pd.read_csv(
-            name, sep=sep, decimal=columns.decimal, comment="#", skipinitialspace=True, nrows=1,
-            usecols=[columns.time], engine="python" if sep == r"\s+" else "c",
-        )
-    except (ValueError, OSError, EOFError, pd.errors.ParserError, pd.errors.EmptyDataError):
+        with recordings.open_csv_source(name) as source:
+            head = pd.read_csv(
+                source, sep=sep, decimal=columns.decimal, comment="#", skipinitialspace=True, nrows=1,
+                usecols=[columns.time], engine="python" if sep == r"\s+" else "c",
+            )
+    except (ValueError, OSError, EOFError, pd.errors.ParserError, pd.errors.EmptyDataError):  # InputError is a ValueError
         return False
     return not pd.api.types.is_numeric_dtype(head[columns.time].dtype)
 

@@ -382,3 +382,106 @@ def test_a_trailing_separator_on_every_row_reads_the_columns_in_place(tmp_path):
     for rec in (whole, chunked):
         np.testing.assert_array_equal(rec.time_s, frame["time"])
         np.testing.assert_array_equal(rec.rate_dps, frame["rate"])
+
+
+# ---------------------------------------------------------------------------
+# Second sweep (issue 39): root causes N1..N33, each case named by what it does.
+# Cases that end in an exit code and one line go into SWEEP_CASES (same check as
+# CASES above); those whose fault was a silent wrong answer check the answer.
+# ---------------------------------------------------------------------------
+
+
+def test_out_through_a_symlink_writes_its_target_and_keeps_the_link(tmp_path):
+    """N1: an output path that is a symbolic link is followed; the link is not replaced by a regular file."""
+    x = _recording(tmp_path / "x.parquet")
+    (tmp_path / "target.json").write_text("old\n")
+    os.symlink("target.json", tmp_path / "link.json")
+    result = CliRunner().invoke(app, ["allan", str(x), "--out", str(tmp_path / "link.json")])
+    assert result.exit_code == 0, result.output
+    assert os.path.islink(tmp_path / "link.json")
+    assert '"series"' in (tmp_path / "target.json").read_text()
+
+
+def test_out_to_a_fifo_writes_into_it(tmp_path):
+    """N1: a FIFO (as /dev/stdout or /dev/null, not a regular file) receives the bytes and stays a FIFO."""
+    import stat
+    import threading
+
+    x = _recording(tmp_path / "x.parquet")
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    received = []
+    fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
+    done = threading.Event()
+
+    def drain():
+        while True:
+            try:
+                data = os.read(fd, 65536)
+            except BlockingIOError:
+                data = None
+            if data:
+                received.append(data)
+            elif done.is_set():
+                break
+            else:
+                done.wait(0.01)
+
+    reader = threading.Thread(target=drain)
+    reader.start()
+    try:
+        result = CliRunner().invoke(app, ["allan", str(x), "--out", str(fifo)])
+    finally:
+        done.set()
+        reader.join()
+        os.close(fd)
+    assert result.exit_code == 0, result.output
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    assert b'"series"' in b"".join(received)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.json", "x.parquet"]
+
+
+def test_out_that_is_a_folder_is_refused(tmp_path):
+    """N1: an output path that is a folder exits 2 naming it (was an IsADirectoryError from os.replace)."""
+    x = _recording(tmp_path / "x.parquet")
+    (tmp_path / "d").mkdir()
+    result = CliRunner().invoke(app, ["allan", str(x), "--out", str(tmp_path / "d")])
+    assert result.exit_code == 2, result.output
+    assert re.search(r"d: is a directory, expected a file to write$", result.stderr.strip())
+
+
+def _setup_sweep(folder: Path) -> None:
+    """The files of :data:`SWEEP_CASES`: those of :func:`_setup` (where h.parquet is a byte-identical copy of x.parquet) and more."""
+    import gzip
+
+    import zstandard
+
+    _setup(folder)
+    text = _recording(folder / "long.csv", n=20_000).read_bytes()
+    (folder / "long.csv").unlink()
+    whole = zstandard.ZstdCompressor().compress(text)
+    (folder / "cut.csv.zst").write_bytes(whole[: int(0.6 * len(whole))])  # a log cut at 60 %
+    (folder / "field.csv.gz").write_bytes(gzip.compress(b"time,rate,temperature\n0," + b"1" * (2 << 20) + b",20\n"))
+    (folder / "damaged.csv.zip").write_bytes(b"PK\x03\x04" + bytes(range(256)) * 4)
+
+
+SWEEP_CASES = [
+    # (case id, root cause, argv, exit code, regex the one stderr line must match)
+    ("diagnose-holdout-is-the-fit-run", "N2", ["diagnose", "x.parquet", "--holdout", "x.parquet", "--out", "d.json"], 2, r"x\.parquet: the same bytes as x\.parquet \(SHA-256 [0-9a-f]{12}\.\.\.\); a held-out run must be another recording"),
+    ("diagnose-holdout-a-copy-of-the-fit-run", "N2", ["diagnose", "x.parquet", "--holdout", "h.parquet", "--out", "d.json"], 2, r"h\.parquet: the same bytes as x\.parquet"),
+    ("diagnose-same-holdout-twice", "N2", ["diagnose", "real.csv", "--holdout", "x.parquet", "--holdout", "x.parquet", "--out", "d.json"], 2, r"x\.parquet: the same bytes as x\.parquet"),
+    ("allan-truncated-zst-streamed", "N3", ["allan", "cut.csv.zst", "--out", "a.json"], 2, r"cut\.csv\.zst: truncated: the compressed stream ends after \d+ decompressed bytes, before its end marker"),
+    ("train-truncated-zst-whole-file", "N3", ["train", "cut.csv.zst", "--config", "polynomial", "--out", "m.json"], 2, r"cut\.csv\.zst: truncated"),
+    ("allan-gz-with-a-huge-field", "N17", ["allan", "field.csv.gz", "--out", "a.json"], 2, r"field\.csv\.gz: a line longer than max_line_bytes = 1048576 bytes.*configs/recordings\.toml \[files\]"),
+    ("train-gz-with-a-huge-field", "N17", ["train", "field.csv.gz", "--config", "polynomial", "--out", "m.json"], 2, r"field\.csv\.gz: a line longer than max_line_bytes"),
+    ("allan-damaged-zip", "N20", ["allan", "damaged.csv.zip", "--out", "a.json"], 2, r"damaged\.csv\.zip: damaged or unsupported zip archive"),
+    ("train-damaged-zip", "N20", ["train", "damaged.csv.zip", "--config", "polynomial", "--out", "m.json"], 2, r"damaged\.csv\.zip: damaged or unsupported zip archive"),
+    ("run-test-is-the-training-run", "N2", ["run", "compare", "x.parquet", "--test", "h.parquet", "--out", "r"], 2, r"h\.parquet: the same bytes as x\.parquet"),
+]
+
+
+@pytest.mark.parametrize("argv, code, message", [c[2:] for c in SWEEP_CASES], ids=[f"{c[1]}-{c[0]}" for c in SWEEP_CASES])
+def test_sweep_case(tmp_path, monkeypatch, argv, code, message):
+    """Issue 39: each case exits `code` with one line naming the file and the value, and writes nothing."""
+    _setup_sweep(tmp_path)
+    _check_case(tmp_path, monkeypatch, argv, code, message)

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocomp import artefacts, recordings
+from gyrocomp import artefacts, compressed, recordings
 from gyrocomp.errors import InputError
 from gyrocomp.recordings import ColumnSpec, read_recording
 
@@ -191,6 +191,7 @@ def test_time_limits_equal_the_shipped_config():
     table = load_config("recordings")
     assert bind(recordings.TimeLimits, table["time"], "recordings.toml") == recordings.TimeLimits()
     assert bind(recordings.AxisLimits, table["axes"], "recordings.toml") == recordings.AxisLimits()
+    assert recordings.file_limits() == compressed.FileLimits()
 
 
 @pytest.mark.skipif(not LSM6DSM.exists(), reason="shared real data absent")

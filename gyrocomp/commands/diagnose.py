@@ -95,6 +95,7 @@ def to_files(
     fit_rec = read(fit)
     holdouts = [options.holdout] if isinstance(options.holdout, (str, os.PathLike)) else list(options.holdout or ())
     hold_recs = [read(path) for path in holdouts]
+    recordings.check_distinct([fit_rec, *hold_recs])
     start = ()
     if options.sim is not None:
         from gyrocomp.sim.model import load_sim_config

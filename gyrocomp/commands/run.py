@@ -128,6 +128,8 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
     held_out = options.test is not None
     test_all = recordings.read_recording(options.test, columns, require_temperature=True, min_samples=16) if held_out else train_all
     names = train_all.axis_names
+    if held_out:
+        recordings.check_distinct([train_all, test_all])
     if held_out and test_all.axis_names != names:
         raise InputError(f"{options.test}: axes {', '.join(test_all.axis_names)} differ from the training run's ({', '.join(names)})")
     several = len(names) > 1
