@@ -59,6 +59,8 @@ __all__ = [
     "read_recording",
     "read_recordings",
     "check_distinct",
+    "check_training_range",
+    "TemperatureLimits",
     "recording_from_frame",
     "RATE_UNITS",
     "ACCELERATION_UNITS",
@@ -587,6 +589,43 @@ def read_recordings(path: str | os.PathLike, columns: ColumnSpec = ColumnSpec(),
     ]
 
 
+@dataclasses.dataclass(frozen=True)
+class TemperatureLimits:
+    """How fast a gyro's temperature can change (``configs/recordings.toml``, ``[temperature]``).
+
+    Parameters
+    ----------
+    max_abs_rate_c_per_s : float, default=100
+        Largest |dT/dt| [degC/s] of a model's training range: a thermal-shock
+        chamber moves about 0.5 degC/s, a hot-air gun on the package some 50.
+    """
+
+    max_abs_rate_c_per_s: float = 100.0
+
+
+def check_training_range(model: str, key: str, low: float, high: float) -> None:
+    """Refuse a model's training range that no recording gives: it would switch the clamp (and its warning) off.
+
+    `key` is ``temperature_c`` (within :data:`PLAUSIBLE_DEGC`, as a
+    recording's temperature is) or ``temperature_rate_c_per_s`` (within
+    :class:`TemperatureLimits`).
+
+    Raises
+    ------
+    InputError
+        Naming the model, the range and the bound (exit 2).
+    """
+    from gyrocomp.config import bind, load_config
+
+    if key == "temperature_c":
+        bound, source = PLAUSIBLE_DEGC, "a recording's plausible temperatures"
+    else:
+        limit = bind(TemperatureLimits, load_config("recordings").get("temperature"), "recordings.toml [temperature]").max_abs_rate_c_per_s
+        bound, source = (-limit, limit), "max_abs_rate_c_per_s (configs/recordings.toml [temperature])"
+    if low < bound[0] or high > bound[1]:
+        raise InputError(f"{model}: training {key} = [{low:.6g}, {high:.6g}] leaves [{bound[0]:g}, {bound[1]:g}], {source}; a corrupted model")
+
+
 def check_distinct(runs: Sequence[Recording]) -> None:
     """Refuse two runs with the same bytes among recordings that must be different runs (a fit run and its held-out ones).
 
@@ -625,6 +664,9 @@ def recording_from_frame(
     _where: tuple[str, int] = ("row", 1),
     _owned: bool = False,
     _gap_note: bool = True,
+    _interval: float | None = None,
+    _open_ends: tuple[bool, bool] = (False, False),
+    _first_segment: int = 0,
 ) -> Recording:
     """Validate an in-memory table as a recording (see :func:`read_recording`).
 
@@ -635,6 +677,14 @@ def recording_from_frame(
     :func:`read_recording`, whose own columns are then reused). The private
     `_gap_note` false leaves the note on gaps out: a chunk of a file whose
     reader reports the gaps of the whole file once (:mod:`gyrocomp.streaming`).
+    The private `_interval` is the sampling interval [s] of the stream a
+    chunk belongs to (its first chunk's median): gaps and jitter are judged
+    against it, not against the chunk's own median, so a chunk where the
+    rate changes is judged as the whole file is. The private `_open_ends`
+    says whether the first and the last segment may go on in the chunks
+    before and after (their length is then the streamed reader's to check), and
+    `_first_segment` the number, in the whole file, of its first segment
+    (0-based), for messages.
 
     The checks run in this order, each its own function: columns present
     (:func:`_select_columns`), cells numeric and finite and converted
@@ -685,10 +735,10 @@ def recording_from_frame(
     n = len(out["time"])
     if n < min_samples:
         raise InputError(f"{name}: {n} samples once duplicates are merged, this command needs at least {min_samples}")
-    nominal = _nominal_interval(out["time"])
-    if columns.time_unit is None and origin is None:  # numbers read as seconds, not datetimes
+    nominal = _nominal_interval(out["time"]) if _interval is None else _interval
+    if columns.time_unit is None and origin is None and _interval is None:  # numbers read as seconds, not datetimes
         _check_time_base(out["time"], nominal, columns.time, name, limits)
-    out, segments, filled = _segments(out, nominal, columns.time, locate, jitter_tolerance, resample, allow_gaps)
+    out, segments, filled = _segments(out, nominal, columns.time, locate, jitter_tolerance, resample, allow_gaps, _open_ends, _first_segment)
     if _gap_note or len(segments) == 1:
         notes.extend(filled)
     for note in notes:
@@ -1111,7 +1161,7 @@ def _check_time_base(time: np.ndarray, nominal: float, src: str, name: str, limi
 _UNIT_WORDS = {"ms": "milliseconds (ms)", "us": "microseconds (µs, us)", "ns": "nanoseconds (ns)"}
 
 
-def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, resample: bool, allow_gaps: bool):
+def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, resample: bool, allow_gaps: bool, open_ends: tuple[bool, bool] = (False, False), first_segment: int = 0):
     """Segments of a time axis, or its uniform resampling; refuse what neither allows.
 
     An interval longer than ``(1 + tolerance)`` times the median is a gap;
@@ -1153,8 +1203,47 @@ def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, res
             f"{nominal:.6g} s (tolerance {tolerance:.0%}); pass --resample to interpolate onto a uniform grid"
         )
     bounds = np.r_[0, long + 1, n]
+    lengths = np.diff(bounds)
+    if open_ends[0]:  # a chunk's first or last segment may go on in its neighbours
+        lengths[0] = 2
+    if open_ends[1]:
+        lengths[-1] = 2
+    check_segment_lengths(lengths, bounds[:-1], time, nominal, src, locate, first_segment)
     segments = [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
     return out, segments, [gap_note(long.size, float(dt(long).max()))]
+
+
+def check_segment_lengths(lengths: np.ndarray, starts: np.ndarray, time: np.ndarray, nominal: float, src: str, locate, first_segment: int = 0) -> None:
+    """Refuse a segment of one sample: no interval, no rate, nothing a command can use.
+
+    Several in a row are a change of sample rate read as gaps (10 Hz, then
+    2 Hz against the 0.1 s of the start), which no segment list describes.
+
+    Parameters
+    ----------
+    lengths, starts : numpy.ndarray
+        Samples in each segment and the index (into `time`) of its first.
+    time : numpy.ndarray
+        The time [s] those indices point into.
+    nominal : float
+        The sampling interval [s] the gaps were judged against.
+    first_segment : int
+        Number (0-based) of the first of these segments in the whole file.
+    """
+    alone = np.flatnonzero(lengths == 1)
+    if not alone.size:
+        return
+    k = int(alone[0])
+    i = int(starts[k])
+    facts = [f"`{src}` = {float(time[i])!r}"]
+    if i > 0:
+        facts.append(f"{float(time[i] - time[i - 1]):.6g} s after the previous sample")
+    facts.append(f"{float(time[i + 1] - time[i]):.6g} s before the next" if i + 1 < len(time) else "the last sample")
+    change = "; the sample rate changes here" if k + 1 < len(lengths) and lengths[k + 1] == 1 else ""
+    raise InputError(
+        f"{locate(i)}: segment {first_segment + k + 1} is one sample ({', '.join(facts)}; the interval is {nominal:.6g} s){change}; "
+        "drop it, or pass --resample to interpolate onto a uniform grid"
+    )
 
 
 def gap_note(n_gaps: int, longest_s: float) -> str:

@@ -118,6 +118,7 @@ class ChunkReader:
         self.n_samples, self.breaks = 0, []
         frames = self._csv_frames() if self._kind == "csv" else _exact_rows(self._parquet_frames(), self.rows, self.first_rows)
         for frame in frames:
+            goes_on = self._goes_on(frame, last_time, nominal)
             chunk = recordings.recording_from_frame(
                 frame,
                 name=self.name,
@@ -130,6 +131,9 @@ class ChunkReader:
                 _where=(where, first + self.n_samples),
                 _owned=True,
                 _gap_note=not self.gaps,
+                _interval=nominal,
+                _open_ends=(goes_on, True),
+                _first_segment=len(self.breaks) + (last_time is not None and not goes_on),
             )
             if len(chunk.segments) > 1:
                 if not self.gaps:
@@ -159,13 +163,40 @@ class ChunkReader:
                     )
             last_time = float(time[-1])
             self.n_samples += len(time)
+            self._check_segments(where, first, ended=False)
             yield chunk
         if self.n_samples == 0:
             raise InputError(f"{self.name}: has a header but no data rows")
+        self._check_segments(where, first, ended=True)
         self._done = True
         if self.breaks and not self._noted:  # the file's gaps, once however often it is read
             warnings.warn(f"{self.name}: {recordings.gap_note(len(self.breaks), longest)}", RecordingNote, stacklevel=2)
             self._noted = True
+
+    def _goes_on(self, frame, last_time: float | None, nominal: float | None) -> bool:
+        """Whether a chunk's first sample continues the previous chunk's last segment (no gap between them)."""
+        if last_time is None:
+            return False
+        try:
+            step = float(next(iter(frame[self.columns.time]))) - last_time
+        except (KeyError, StopIteration, TypeError, ValueError):
+            return True  # the chunk's own checks will say what is wrong
+        return step <= nominal * (1 + self.jitter_tolerance)
+
+    def _check_segments(self, where: str, first: int, ended: bool) -> None:
+        """Refuse a segment of one sample among those read so far (as the whole-file reader does), the last one once `ended`."""
+        starts = np.array([0, *self.breaks])
+        ends = np.r_[starts[1:], self.n_samples]
+        lengths = ends - starts
+        if not ended:
+            lengths[-1] = 2  # the open segment may go on
+        alone = np.flatnonzero(lengths == 1)
+        if alone.size:
+            k = int(alone[0])
+            raise InputError(
+                f"{self.name} {where} {first + int(starts[k])}: segment {k + 1} is one sample (alone after a gap in `{self.columns.time}`; "
+                f"the interval is {1.0 / self.fs_hz:.6g} s); drop it, or pass --resample to interpolate onto a uniform grid"
+            )
 
     def _csv_frames(self):
         import pandas as pd

@@ -450,19 +450,71 @@ def test_out_that_is_a_folder_is_refused(tmp_path):
     assert re.search(r"d: is a directory, expected a file to write$", result.stderr.strip())
 
 
-def _setup_sweep(folder: Path) -> None:
-    """The files of :data:`SWEEP_CASES`: those of :func:`_setup` (where h.parquet is a byte-identical copy of x.parquet) and more."""
+@pytest.fixture(scope="module")
+def sweep_files(tmp_path_factory) -> Path:
+    """The larger files of :data:`SWEEP_CASES`, written once and copied into each case's folder."""
     import gzip
 
     import zstandard
 
-    _setup(folder)
-    text = _recording(folder / "long.csv", n=20_000).read_bytes()
-    (folder / "long.csv").unlink()
+    folder = tmp_path_factory.mktemp("sweep")
+    text = _frame(np.arange(20_000.0)).to_csv(index=False).encode()
     whole = zstandard.ZstdCompressor().compress(text)
     (folder / "cut.csv.zst").write_bytes(whole[: int(0.6 * len(whole))])  # a log cut at 60 %
     (folder / "field.csv.gz").write_bytes(gzip.compress(b"time,rate,temperature\n0," + b"1" * (2 << 20) + b",20\n"))
     (folder / "damaged.csv.zip").write_bytes(b"PK\x03\x04" + bytes(range(256)) * 4)
+    time = np.r_[0.1 * np.arange(65536), 6553.5 + 0.5 * np.arange(1, 2000)]  # 10 Hz for the first chunk, then 2 Hz
+    _frame(time).to_csv(folder / "rate_drop.csv", index=False)
+    time = 0.1 * np.arange(65538)
+    time[-1] += 5.0  # a gap before the last row: a final chunk of 2 rows
+    _frame(time).to_csv(folder / "last_alone.csv", index=False)
+    time = np.arange(600.0)
+    time[-1] += 30.0  # a gap before the last sample: a segment of one sample
+    _frame(time).to_csv(folder / "lone.csv", index=False)
+    time = 0.1 * np.arange(131072)
+    time[65536 + 1 : 131072 : 2] += 0.04  # jitter within the tolerance in the second chunk only
+    _frame(time).to_csv(folder / "jitter.csv", index=False)
+    return folder
+
+
+def _setup_sweep(folder: Path, files: Path, model: Path) -> None:
+    """The files of :data:`SWEEP_CASES`: those of :func:`_setup` (where h.parquet is a byte-identical copy of x.parquet), `files`,
+    and `model` (a gyro model, deg/s) as m.json, as an accelerometer's (acc.json) and in furlong/fortnight."""
+    import json
+    import shutil
+
+    _setup(folder)
+    for path in files.iterdir():
+        shutil.copy(path, folder / path.name)
+    (folder / "m.json").write_bytes(model.read_bytes())
+    for name, unit in (("acc.json", "m/s^2"), ("furlong.json", "furlong/fortnight")):
+        obj = json.loads(model.read_text())
+        obj["axes"]["rate"]["unit"] = unit
+        (folder / name).write_text(json.dumps(obj))
+    def cubic_only() -> dict:  # the model without its dT/dt term, which the firmwares cannot hold
+        obj = json.loads(model.read_text())
+        fitted = next(iter(obj["axes"]["rate"]["segments"].values()))["learner"]
+        fitted["params"]["rate_term"], fitted["fitted"]["rate_coef_"] = False, 0.0
+        return obj
+
+    (folder / "cubic.json").write_text(json.dumps(cubic_only()))
+    for name, cubic in (("huge.json", 1e306), ("beyond_float.json", 1e39)):  # finite doubles, the cubic coefficient
+        obj = cubic_only()
+        next(iter(obj["axes"]["rate"]["segments"].values()))["learner"]["fitted"]["coef_"][3] = cubic
+        (folder / name).write_text(json.dumps(obj))
+    for name, (low, high) in (("wide.json", (-1e300, 1e300)), ("flat.json", (25.0, 25.0))):
+        obj = cubic_only()
+        obj["axes"]["rate"]["training"]["temperature_c"] = {"min": low, "max": high}
+        (folder / name).write_text(json.dumps(obj))
+    obj = cubic_only()
+    obj["axes"]["rate"]["training"]["temperature_rate_c_per_s"] = {"min": -1e300, "max": 1e300}
+    (folder / "wide_rate.json").write_text(json.dumps(obj))
+
+
+def _frame(time: np.ndarray) -> pd.DataFrame:
+    """A recording on the time stamps `time` [s]."""
+    rng = np.random.default_rng(0)
+    return pd.DataFrame({"time": time, "rate": 0.01 * rng.standard_normal(time.size), "temperature": 20.0 + time / 6000.0})
 
 
 SWEEP_CASES = [
@@ -476,12 +528,69 @@ SWEEP_CASES = [
     ("train-gz-with-a-huge-field", "N17", ["train", "field.csv.gz", "--config", "polynomial", "--out", "m.json"], 2, r"field\.csv\.gz: a line longer than max_line_bytes"),
     ("allan-damaged-zip", "N20", ["allan", "damaged.csv.zip", "--out", "a.json"], 2, r"damaged\.csv\.zip: damaged or unsupported zip archive"),
     ("train-damaged-zip", "N20", ["train", "damaged.csv.zip", "--config", "polynomial", "--out", "m.json"], 2, r"damaged\.csv\.zip: damaged or unsupported zip archive"),
+    ("allan-rate-drops-after-the-first-chunk-streamed", "N4", ["allan", "rate_drop.csv", "--max-arw", "1.5", "--out", "a.json"], 2, r"rate_drop\.csv line 65538: segment 2 is one sample"),
+    ("diagnose-rate-drops-whole-file", "N4", ["diagnose", "rate_drop.csv", "--out", "d.json"], 2, r"rate_drop\.csv line 65538: segment 2 is one sample \(`time` = 6554\.0, 0\.5 s after the previous sample, 0\.5 s before the next; the interval is 0\.1 s\); the sample rate changes here"),
+    ("allan-gap-before-a-final-chunk-of-two-rows", "N4", ["allan", "last_alone.csv", "--out", "a.json"], 2, r"last_alone\.csv line 65539: segment 2 is one sample"),
+    ("compensate-accelerometer-model-on-a-gyro", "N5", ["compensate", "x.parquet", "acc.json", "--out", "c.parquet"], 2, r"acc\.json axis rate: a model in m/s\^2 \(acceleration \(accelerometer\)\) cannot compensate axis rate of x\.parquet, in deg/s"),
+    ("compensate-gyro-model-on-an-accelerometer", "N5", ["compensate", "x.parquet", "m.json", "--rate-unit", "g", "--out", "c.parquet"], 2, r"m\.json axis rate: a model in deg/s \(angular rate \(gyro\)\) cannot compensate axis rate of x\.parquet, in m/s\^2"),
+    ("compensate-full-accelerometer-model-on-a-gyro", "N5", ["compensate", "x.parquet", "acc.json", "--mode", "full", "--out", "c.parquet"], 2, r"acc\.json axis rate: a model in m/s\^2"),
+    ("compensate-model-in-furlongs-per-fortnight", "N5", ["compensate", "x.parquet", "furlong.json", "--out", "c.parquet"], 2, r"furlong\.json axis rate: unit 'furlong/fortnight' is not a sensor unit; a model is in deg/s or m/s\^2"),
+    ("export-accelerometer-model-as-px4-gyro", "N5", ["export", "acc.json", "--format", "px4", "--device-id", "1", "--out", "a.params"], 2, r"acc\.json axis rate: --format px4 has no parameter for a model in m/s\^2 \(acceleration \(accelerometer\)\); it takes deg/s"),
+    ("export-accelerometer-model-as-ardupilot-gyro", "N5", ["export", "acc.json", "--format", "ardupilot", "--out", "a.parm"], 2, r"acc\.json axis rate: --format ardupilot has no parameter for a model in m/s\^2"),
+    ("export-model-in-furlongs-as-json", "N5", ["export", "furlong.json", "--format", "json-plain", "--out", "p.json"], 2, r"furlong\.json axis rate: unit 'furlong/fortnight' is not a sensor unit"),
+    ("export-c-vectors-from-an-accelerometer", "N5", ["export", "m.json", "--format", "c", "--vectors", "x.parquet", "--rate-unit", "g", "--out", "m.h"], 2, r"m\.json axis rate: a model in deg/s \(angular rate \(gyro\)\) cannot compensate axis rate of x\.parquet, in m/s\^2"),
+    ("export-px4-offset-beyond-any-gyro", "N6", ["export", "beyond_float.json", "--format", "px4", "--device-id", "1", "--out", "a.params"], 2, r"beyond_float\.json: export: axis x: the offset reaches -9\.96816e\+39 deg/s at 15 degC, beyond \+-100000 deg/s"),
+    ("export-ardupilot-offset-beyond-any-gyro", "N6", ["export", "beyond_float.json", "--format", "ardupilot", "--out", "a.parm"], 2, r"beyond_float\.json: export: axis x: the offset reaches"),
+    ("export-c-coefficient-beyond-float32", "N6", ["export", "beyond_float.json", "--format", "c", "--out", "m.h"], 2, r"beyond_float\.json axis rate: segment drift gives a drift of [-0-9.e+]+ deg/s at sample 0 \(T = 15 degC, dT/dt = 0 degC/s\), beyond \+-100000 deg/s"),
+    ("export-px4-range-1e300", "N6", ["export", "wide.json", "--format", "px4", "--device-id", "1", "--out", "a.params"], 2, r"wide\.json axis rate: training temperature_c = \[-1e\+300, 1e\+300\] leaves \[-100, 200\]"),
+    ("export-px4-tmin-equals-tmax", "N6", ["export", "flat.json", "--format", "px4", "--device-id", "1", "--out", "a.params"], 2, r"flat\.json: export: TMIN = TMAX = 25\.0 degC"),
+    ("compensate-temperature-range-1e300", "N6", ["compensate", "x.parquet", "wide.json", "--out", "c.parquet"], 2, r"wide\.json axis rate: training temperature_c = \[-1e\+300, 1e\+300\] leaves \[-100, 200\], a recording's plausible temperatures"),
+    ("compensate-rate-range-1e300", "N6", ["compensate", "x.parquet", "wide_rate.json", "--out", "c.parquet"], 2, r"wide_rate\.json axis rate: training temperature_rate_c_per_s = \[-1e\+300, 1e\+300\] leaves \[-100, 100\], max_abs_rate_c_per_s \(configs/recordings\.toml \[temperature\]\)"),
+    ("export-px4-device-id-beyond-int32", "N7", ["export", "cubic.json", "--format", "px4", "--device-id", "4294967296", "--out", "a.params"], 2, r"export: TC_G0_ID = 4294967296 is beyond INT32 \(-2147483648\.\.2147483647\)"),
+    ("compensate-huge-coefficient-overflows", "N9", ["compensate", "x.parquet", "huge.json", "--out", "c.parquet"], 2, r"huge\.json axis rate: segment drift gives a drift of -1\.24\d+e\+306 deg/s at sample 0 \(T = 20 degC, dT/dt = 0 degC/s\), beyond \+-100000 deg/s \(configs/recordings\.toml \[axes\]\); a corrupted model"),
+    ("compensate-full-huge-coefficient-overflows", "N9", ["compensate", "x.parquet", "huge.json", "--mode", "full", "--out", "c.parquet"], 2, r"huge\.json axis rate: segment [^ ]+ gives a drift of"),
+    ("allan-one-sample-segment-after-a-gap", "N29", ["allan", "lone.csv", "--out", "a.json"], 2, r"lone\.csv line 601: segment 2 is one sample \(alone after a gap in `time`; the interval is 1 s\)"),
+    ("diagnose-one-sample-segment-after-a-gap", "N29", ["diagnose", "lone.csv", "--out", "d.json"], 2, r"lone\.csv line 601: segment 2 is one sample \(`time` = 629\.0, 31 s after the previous sample, the last sample; the interval is 1 s\)"),
     ("run-test-is-the-training-run", "N2", ["run", "compare", "x.parquet", "--test", "h.parquet", "--out", "r"], 2, r"h\.parquet: the same bytes as x\.parquet"),
 ]
 
 
 @pytest.mark.parametrize("argv, code, message", [c[2:] for c in SWEEP_CASES], ids=[f"{c[1]}-{c[0]}" for c in SWEEP_CASES])
-def test_sweep_case(tmp_path, monkeypatch, argv, code, message):
+def test_sweep_case(tmp_path, monkeypatch, sweep_files, trained_model, argv, code, message):
     """Issue 39: each case exits `code` with one line naming the file and the value, and writes nothing."""
-    _setup_sweep(tmp_path)
+    _setup_sweep(tmp_path, sweep_files, trained_model)
     _check_case(tmp_path, monkeypatch, argv, code, message)
+
+
+def test_jitter_in_one_chunk_is_judged_against_the_stream_interval(sweep_files):
+    """N4: intervals of 0.1 and 0.14 s in the second chunk only: no gaps (the chunk's own median made 32 767 of them), same as the whole file."""
+    from gyrocomp import recordings, streaming
+
+    whole = recordings.read_recording(sweep_files / "jitter.csv", allow_gaps=True)
+    reader = streaming.read_chunks(sweep_files / "jitter.csv", gaps=True)
+    n = sum(chunk.n_samples for chunk in reader)
+    assert (n, len(reader.breaks), len(whole.segments)) == (131072, 0, 1)
+    assert reader.fs_hz == pytest.approx(whole.fs_hz, rel=1e-9)
+
+
+def test_an_accelerometer_model_exports_as_plain_json_in_its_unit(tmp_path, sweep_files, trained_model):
+    """N5: json-plain keeps the model's unit (it wrote deg/s for every model)."""
+    import json
+
+    _setup_sweep(tmp_path, sweep_files, trained_model)
+    for model, unit in (("acc.json", "m/s^2"), ("m.json", "deg/s")):
+        result = CliRunner().invoke(app, ["export", str(tmp_path / model), "--format", "json-plain", "--out", str(tmp_path / f"plain_{unit[0]}.json")])
+        assert result.exit_code == 0, result.output
+        assert json.loads((tmp_path / f"plain_{unit[0]}.json").read_text())["units"]["rate"] == unit
+
+
+def test_firmware_parameters_beyond_single_precision_are_refused():
+    """N6: a parameter a float cannot hold is refused, naming it (was written, and loaded as inf)."""
+    from gyrocomp.export.cubic import Cubic
+    from gyrocomp.export.firmware import ardupilot_params, px4_params
+
+    narrow = Cubic(35.0, (0.0, 0.0, 0.0, 3e40), (35.0 - 1e-12, 35.0 + 1e-12))  # offsets of 3e4 deg/s at most over its range
+    with pytest.raises(InputError, match=r"^export: TC_G0_X3_0 = 5\.23\d*e\+38 is beyond single precision \(\+-3\.402823e\+38\), which the firmware stores$"):
+        px4_params({"x": narrow}, device_id=1)
+    with pytest.raises(InputError, match=r"^export: INS_TCAL1_GYR3_X = 5\.23\d*e\+44 is beyond single precision"):
+        ardupilot_params({"x": narrow})

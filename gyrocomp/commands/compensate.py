@@ -351,16 +351,24 @@ def write(path: Path, frame, summaries: dict, recording, model_path: Path, mode:
 
 
 def _pair_axes(recording, models: dict, name: str, *, alone: bool = True) -> dict:
-    """The model of each axis of the recording: same name, or the one model of a one-axis file for a one-axis recording `alone` in its file."""
+    """The model of each axis of the recording: same name, or the one model of a one-axis file for a one-axis recording `alone` in its file.
+
+    Each model must be in its axis' unit (:func:`gyrocomp.units.check_compensates`).
+    """
+    from gyrocomp import units
     from gyrocomp.errors import InputError
 
     if alone and len(models) == 1 and len(recording.axes) == 1:
-        return {recording.axis_names[0]: next(iter(models.values()))}
-    missing = [axis for axis in recording.axis_names if axis not in models]
-    if missing:
-        have = ", ".join(str(a) for a in models)
-        raise InputError(f"{name}: no model for axis {', '.join(missing)} of {recording.name} (it has {have}); pick the axes with --rate-col")
-    return {axis: models[axis] for axis in recording.axis_names}
+        pairs = {recording.axis_names[0]: next(iter(models.values()))}
+    else:
+        missing = [axis for axis in recording.axis_names if axis not in models]
+        if missing:
+            have = ", ".join(str(a) for a in models)
+            raise InputError(f"{name}: no model for axis {', '.join(missing)} of {recording.name} (it has {have}); pick the axes with --rate-col")
+        pairs = {axis: models[axis] for axis in recording.axis_names}
+    for axis, model in pairs.items():
+        units.check_compensates(model, recording.axis(axis).axes[0].unit, recording.name, axis)
+    return pairs
 
 
 def _model_axis(models: dict, model):

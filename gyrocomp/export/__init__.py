@@ -19,6 +19,7 @@ from typing import Callable
 
 import numpy as np
 
+from gyrocomp import units
 from gyrocomp.errors import InputError
 
 __all__ = ["Format", "FORMATS", "ExportOptions", "export_model", "reference_vectors"]
@@ -63,10 +64,15 @@ class ExportOptions:
 
 @dataclasses.dataclass(frozen=True)
 class Format:
-    """One export format: its usual file suffix and its writer ``(model, options) -> (text, summary)``."""
+    """One export format: its usual file suffix, its writer ``(model, options) -> (text, summary)`` and the units it has parameters for.
+
+    `units` is checked for every axis before writing (:func:`gyrocomp.units.check_exportable`):
+    a format that adds accelerometer parameters adds ``"m/s^2"`` here.
+    """
 
     suffix: str
     write: Callable
+    units: tuple[str, ...] = ("deg/s",)
 
 
 def export_model(model, fmt: str, options: ExportOptions = ExportOptions()) -> tuple[str, dict]:
@@ -99,6 +105,8 @@ def export_model(model, fmt: str, options: ExportOptions = ExportOptions()) -> t
     models = dict(model) if isinstance(model, dict) else {None: model}
     if not models:
         raise InputError("export: the model holds no axis")
+    for one in models.values():
+        units.check_exportable(one, fmt, FORMATS[fmt].units)
     text, summary = FORMATS[fmt].write(models, options)
     return text, {"format": fmt, **summary}
 
@@ -236,6 +244,7 @@ def _c(models: dict, options: ExportOptions):
         if recording is not None:
             names = recording.axis_names
             recording = recording.axis(name if name in names else names[0])
+            units.check_compensates(model, recording.axes[0].unit, recording.name, recording.axis_names[0])
         vectors = reference_vectors(model, recording, options.n_vectors)
         blocks.append(c_header(plain_model(model, centred=True), vectors, prefix=prefix))
         counts[str(name)] = len(vectors["temperature_c"])
@@ -254,7 +263,7 @@ def _json_plain(models: dict, options: ExportOptions):
 FORMATS = {
     "px4": Format(".params", _px4),
     "ardupilot": Format(".parm", _ardupilot),
-    "c": Format(".h", _c),
-    "json-plain": Format(".json", _json_plain),
+    "c": Format(".h", _c, units=tuple(units.SENSOR_UNITS)),
+    "json-plain": Format(".json", _json_plain, units=tuple(units.SENSOR_UNITS)),
 }
 """Export formats by name."""

@@ -208,7 +208,14 @@ def _shift_matrix(p: int, h: float) -> np.ndarray:
 
 
 def _num(value) -> str:
-    return repr(float(value))
+    """A C constant; refused beyond single precision, which ``GYROCOMP_REAL float`` would read as inf."""
+    value = float(value)
+    if not abs(value) <= _FLOAT32_MAX:
+        raise InputError(f"export c: constant {value!r} is beyond single precision (+-{_FLOAT32_MAX:.7g}); the header must compile as float too")
+    return repr(value)
+
+
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def _list(values) -> str:

@@ -84,6 +84,8 @@ def px4_params(cubics: dict, *, instance: int = 0, device_id: int = 0, source: s
         "#",
         "# Vehicle-Id Component-Id Name Value Type",
     ]
+    _check_real32([(name, value) for name, value, kind in rows if kind == 9])
+    _check_int32([(name, value) for name, value, kind in rows if kind == 6])
     lines += [f"1\t1\t{name}\t{value!r}\t{kind}" for name, value, kind in rows]
     return "\n".join(lines) + "\n"
 
@@ -117,6 +119,7 @@ def ardupilot_params(cubics: dict, *, instance: int = 1, source: str = "") -> st
         "# corrected = raw - P(clamp(T) - 35) + P(clamp(CALTEMP) - 35) - GYROFFS, P(x) = 1e-6 (GYR1 x + GYR2 x^2 + GYR3 x^3) [rad/s]",
         "# a start-up gyro calibration (INS_GYR_CAL = 1) replaces GYROFFS and CALTEMP with the boot's own",
     ]
+    _check_real32(rows)
     lines += [f"{name} {_positional(value)}" for name, value in rows]
     return "\n".join(lines) + "\n"
 
@@ -131,7 +134,49 @@ def _shared_range(cubics: dict) -> tuple[float, float]:
     if len(ranges) > 1:
         raise InputError(f"export: the axes were trained over different temperature ranges {sorted(ranges)}; firmware holds one TMIN/TMAX per IMU")
     lo, hi = ranges.pop()
+    if not lo < hi:
+        raise InputError(f"export: TMIN = TMAX = {lo!r} degC: the model was trained at one temperature; firmware needs a calibrated range")
+    _check_offsets(cubics, float(lo), float(hi))
     return float(lo), float(hi)
+
+
+def _check_offsets(cubics: dict, lo: float, hi: float, points: int = 257) -> None:
+    """Refuse a polynomial whose offset over [TMIN, TMAX] no gyro reads (:class:`gyrocomp.recordings.AxisLimits`): single precision would overflow on it."""
+    from gyrocomp.recordings import AxisLimits
+
+    bound = AxisLimits().max_abs_deg_s
+    grid = np.linspace(lo, hi, points)
+    for axis, cubic in cubics.items():
+        with np.errstate(over="ignore", invalid="ignore"):
+            values = cubic(grid)
+            bad = np.flatnonzero(~(np.abs(values) <= bound))
+        if bad.size:
+            i = int(bad[np.argmax(np.abs(values[bad]))]) if np.all(np.isfinite(values[bad])) else int(bad[0])
+            raise InputError(
+                f"export: axis {axis}: the offset reaches {float(values[i]):.6g} deg/s at {grid[i]:.6g} degC, beyond +-{bound:g} deg/s "
+                "that any gyro reads (configs/recordings.toml [axes]); a corrupted model"
+            )
+
+
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+"""Largest finite single-precision value: both firmwares hold their parameters as float (PX4 REAL32, ArduPilot AP_Float)."""
+
+INT32 = (-(2**31), 2**31 - 1)
+"""Range of a PX4 INT32 parameter (type 6)."""
+
+
+def _check_real32(rows) -> None:
+    """Refuse a float parameter that single precision cannot hold (it would load as inf)."""
+    for name, value in rows:
+        if not abs(float(value)) <= FLOAT32_MAX:
+            raise InputError(f"export: {name} = {float(value)!r} is beyond single precision (+-{FLOAT32_MAX:.7g}), which the firmware stores")
+
+
+def _check_int32(rows) -> None:
+    """Refuse an integer parameter beyond INT32 (PX4 would store it wrapped)."""
+    for name, value in rows:
+        if not INT32[0] <= int(value) <= INT32[1]:
+            raise InputError(f"export: {name} = {int(value)} is beyond INT32 ({INT32[0]}..{INT32[1]}), which PX4 stores")
 
 
 def _padded(coef, n: int) -> list[float]:

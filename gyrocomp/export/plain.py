@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from gyrocomp import units
 from gyrocomp.errors import InputError
 
 __all__ = ["PLAIN_SCHEMA", "plain_model"]
@@ -74,7 +75,7 @@ def plain_model(model, *, centred: bool = False) -> dict:
     return {
         "schema": PLAIN_SCHEMA,
         "kind": model.kind,
-        "units": {"temperature": "degC", "temperature_rate": "degC/s", "rate": "deg/s"},
+        "units": {"temperature": "degC", "temperature_rate": "degC/s", "rate": units.model_unit(model)},
         "fs_hz": float(estimator["fs_hz"]),
         "rate_estimator": {
             "form": "causal FIR, oldest sample first; the window is primed with the first reading",

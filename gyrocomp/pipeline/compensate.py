@@ -111,18 +111,34 @@ class DriftModel:
         clamp = self.clip_inputs if clamp is None else clamp
         out = {segment: np.empty(len(X)) for segment in self.learners}
         for start in range(0, len(X), CHUNK_ROWS):
-            for segment, y in self._predict_rows(X[start : start + CHUNK_ROWS], clamp).items():
+            for segment, y in self._predict_rows(X[start : start + CHUNK_ROWS], clamp, start).items():
                 out[segment][start : start + CHUNK_ROWS] = y
         return out
 
-    def _predict_rows(self, X: np.ndarray, clamp: bool) -> dict:
+    def _predict_rows(self, X: np.ndarray, clamp: bool, start: int = 0) -> dict:
         if clamp:
             X = clamp_inputs(X, self)
         out = {}
         for segment, (learner, x_offset, x_scale, y_offset, y_scale, y_range) in self.learners.items():
-            y = learner.predict(scaled_columns(X, x_offset, x_scale)) * y_scale + y_offset
+            with np.errstate(over="ignore", invalid="ignore"):  # a non-finite result is refused below, naming its input
+                y = learner.predict(scaled_columns(X, x_offset, x_scale)) * y_scale + y_offset
+            self._check_drift(segment, y, X, start)
             out[segment] = np.clip(y, *y_range) if self.clip_output else y
         return out
+
+
+    def _check_drift(self, segment: str, y: np.ndarray, X: np.ndarray, start: int) -> None:
+        """Refuse a drift that is not finite or beyond what any sensor reads (:class:`gyrocomp.recordings.AxisLimits`): a model's finite but huge numbers (1e306) would overflow the compensated column."""
+        unit = self.obj.get("unit", "deg/s")
+        bound = recordings.AxisLimits().bound(unit)
+        with np.errstate(invalid="ignore"):
+            bad = np.flatnonzero(~(np.abs(y) <= bound))
+        if bad.size:
+            i = int(bad[0])
+            raise InputError(
+                f"{self.name}: segment {segment} gives a drift of {float(y[i])!r} {unit} at sample {start + i} "
+                f"(T = {X[i, 0]:.6g} degC, dT/dt = {X[i, 1]:.6g} degC/s), beyond +-{bound:g} {unit} (configs/recordings.toml [axes]); a corrupted model"
+            )
 
 
 class CausalCompensation:
@@ -241,7 +257,7 @@ def _drift_model(obj: dict, name: str):
             y_range = _finite_range(where, "output_min/output_max", entry["output_min"], entry["output_max"])
             learners[segment] = (learner, offset, scale, y_offset, y_scale, y_range)
         for key in ("temperature_c", "temperature_rate_c_per_s"):
-            _finite_range(f"{name}: training", key, obj["training"][key]["min"], obj["training"][key]["max"])
+            recordings.check_training_range(name, key, *_finite_range(f"{name}: training", key, obj["training"][key]["min"], obj["training"][key]["max"]))
         kind = check_choice(name, "kind", obj["kind"], PIPELINE_KINDS)
         parallel, *clips = (_flag(name, key, obj[key]) for key in ("parallel", "clip_inputs", "clip_output"))
         if parallel:  # full mode decomposes with it
