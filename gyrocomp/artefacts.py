@@ -41,6 +41,7 @@ __all__ = [
     "write_json",
     "read_json",
     "atomic_path",
+    "name_part",
     "artefact_header",
     "check_header",
     "parquet_header",
@@ -300,6 +301,25 @@ def _output_kind(path: str | os.PathLike, target: Path) -> str:
         return "stream"
     what = "a directory" if stat.S_ISDIR(mode) else "a socket" if stat.S_ISSOCK(mode) else "a block device"
     raise InputError(f"{os.fspath(path)}: is {what}, expected a file to write")
+
+
+def name_part(value, what: str) -> str:
+    """`value` (a column, axis or stream name) as one component of a file or folder name.
+
+    A name that holds a path separator, a NUL or is ``.`` or ``..`` (or
+    empty) would write outside the output folder (``gy/../../X``, an
+    absolute path) or fail half-way through the writes: refused before
+    anything is written.
+
+    Raises
+    ------
+    InputError
+        ``<what> '<value>' cannot name a file or folder``.
+    """
+    text = str(value)
+    if text in ("", ".", "..") or any(c in text for c in ("/", "\\", "\x00")):
+        raise InputError(f"{what} {text!r} cannot name a file or folder (a path separator, or . or ..); rename the column")
+    return text
 
 
 def artefact_header(

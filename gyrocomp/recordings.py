@@ -59,6 +59,9 @@ __all__ = [
     "read_recording",
     "read_recordings",
     "check_distinct",
+    "LengthLimits",
+    "length_limits",
+    "check_length",
     "check_training_range",
     "TemperatureLimits",
     "recording_from_frame",
@@ -626,6 +629,49 @@ def check_training_range(model: str, key: str, low: float, high: float) -> None:
         raise InputError(f"{model}: training {key} = [{low:.6g}, {high:.6g}] leaves [{bound[0]:g}, {bound[1]:g}], {source}; a corrupted model")
 
 
+@dataclasses.dataclass(frozen=True)
+class LengthLimits:
+    """Most samples a command makes up rather than reads (``configs/recordings.toml``, ``[lengths]``).
+
+    Each is generous enough for a week at 1 kHz (6.05e8 samples); beyond
+    it the request is refused, naming the setting, before memory runs out
+    (a 29-day gap resampled at 1 kHz asked for 18.7 GiB).
+
+    Parameters
+    ----------
+    resample_max_samples : int, default=1_000_000_000
+        Samples of a recording interpolated onto a uniform grid (``--resample``).
+    simulate_max_samples : int, default=1_000_000_000
+        Samples of a simulated recording (duration times sample rate).
+    export_max_vectors : int, default=1_000_000_000
+        Test vectors of a C header (``export --n-vectors``).
+    """
+
+    resample_max_samples: int = 1_000_000_000
+    simulate_max_samples: int = 1_000_000_000
+    export_max_vectors: int = 1_000_000_000
+
+
+def length_limits() -> LengthLimits:
+    """The :class:`LengthLimits` of ``configs/recordings.toml``."""
+    from gyrocomp.config import bind, load_config
+
+    return bind(LengthLimits, load_config("recordings").get("lengths"), "recordings.toml [lengths]")
+
+
+def check_length(setting: str, n: float, what: str) -> None:
+    """Refuse making `n` samples where :class:`LengthLimits` field `setting` allows fewer; `what` says what asked for them.
+
+    Raises
+    ------
+    InputError
+        Naming `what`, the count and the setting (exit 2).
+    """
+    limit = getattr(length_limits(), setting)
+    if not n <= limit:
+        raise InputError(f"{what} needs {n:.4g} samples, more than {setting} = {limit} (configs/recordings.toml [lengths])")
+
+
 def check_distinct(runs: Sequence[Recording]) -> None:
     """Refuse two runs with the same bytes among recordings that must be different runs (a fit run and its held-out ones).
 
@@ -1068,12 +1114,21 @@ def _time_seconds(series, spec: ColumnSpec, locate, owned: bool) -> tuple[np.nda
     raw = series if isinstance(series, np.ndarray) else (None if _is_text(series) else series.to_numpy())
     if factor != 1.0 and raw is not None and raw.dtype.kind in "iu":
         start = raw[0]
-        return (raw - start).astype(float) * factor, f"{int(start)} {unit}"
+        return _signed_difference(raw, start).astype(float) * factor, f"{int(start)} {unit}"
     values = _numeric_column(series, spec.time, locate)
     if factor == 1.0:
         return _own(values, owned), None
     start = float(values[0])
     return (values - start) * factor, f"{start!r} {unit}"
+
+
+def _signed_difference(raw: np.ndarray, start) -> np.ndarray:
+    """``raw - start`` of integer stamps as signed integers: unsigned ones (PX4's µs) that reset below `start` go negative, not round the 2**64 wheel."""
+    if raw.dtype.kind == "u":
+        if raw.dtype.itemsize < 8:
+            return raw.astype(np.int64) - np.int64(start)
+        return (raw - start).view(np.int64)  # the two's complement of the wrapped difference: exact while |difference| < 2**63
+    return raw - start
 
 
 def _datetime_seconds(series, src: str, locate) -> tuple[np.ndarray, str]:
@@ -1193,7 +1248,7 @@ def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, res
             if long.size
             else f"resampled onto a uniform {nominal:.6g} s grid: no gap, {short.size} short intervals"
         )
-        out = _resample(out, nominal)
+        out = _resample(out, nominal, src, locate)
         return out, [slice(0, len(out["time"]))], [note]
     if short.size or not allow_gaps:
         candidates = short if allow_gaps else np.r_[short, long]
@@ -1251,9 +1306,11 @@ def gap_note(n_gaps: int, longest_s: float) -> str:
     return f"{n_gaps + 1} segments: {n_gaps} gaps, the longest {longest_s:.6g} s (not interpolated)"
 
 
-def _resample(columns: dict[str, np.ndarray], interval: float) -> dict[str, np.ndarray]:
+def _resample(columns: dict[str, np.ndarray], interval: float, src: str = "time", locate=None) -> dict[str, np.ndarray]:
     time = columns["time"]
-    n = int(math.floor((time[-1] - time[0]) / interval + 1e-9)) + 1
+    n = math.floor((time[-1] - time[0]) / interval + 1e-9) + 1
+    where = f"{locate(len(time) - 1).rsplit(' ', 2)[0]}: " if locate is not None else ""
+    check_length("resample_max_samples", n, f"{where}--resample onto a {interval:.6g} s grid over {time[-1] - time[0]:.6g} s of `{src}`")
     grid = time[0] + interval * np.arange(n)
     return {key: (grid if key == "time" else np.interp(grid, time, values)) for key, values in columns.items()}
 

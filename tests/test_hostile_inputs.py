@@ -468,6 +468,14 @@ def sweep_files(tmp_path_factory) -> Path:
     time = 0.1 * np.arange(65538)
     time[-1] += 5.0  # a gap before the last row: a final chunk of 2 rows
     _frame(time).to_csv(folder / "last_alone.csv", index=False)
+    time = np.r_[np.arange(100) * 1e-3, 29 * 86400.0 + np.arange(100) * 1e-3]  # 1 kHz, a 29-day gap
+    _frame(time).assign(temperature=25.0).to_csv(folder / "month_gap.csv", index=False)
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    stamps = 1_700_000_000_000_000 + 10_000 * np.arange(1000, dtype=np.uint64)  # unsigned µs, as PX4 stores them
+    stamps[600:] = 5 + 10_000 * np.arange(400, dtype=np.uint64)  # the clock resets below the first stamp
+    pq.write_table(pa.table({"timestamp": stamps, "rate": np.sin(np.arange(1000.0)), "temperature": np.full(1000, 25.0)}), folder / "reset_us.parquet")
     time = np.arange(600.0)
     time[-1] += 30.0  # a gap before the last sample: a segment of one sample
     _frame(time).to_csv(folder / "lone.csv", index=False)
@@ -509,6 +517,13 @@ def _setup_sweep(folder: Path, files: Path, model: Path) -> None:
     obj = cubic_only()
     obj["axes"]["rate"]["training"]["temperature_rate_c_per_s"] = {"min": -1e300, "max": 1e300}
     (folder / "wide_rate.json").write_text(json.dumps(obj))
+    obj = json.loads(model.read_text())
+    obj["axes"] = {"gx": obj["axes"]["rate"], "gx_compensated": obj["axes"]["rate"]}
+    (folder / "gx.json").write_text(json.dumps(obj))
+    frame = _frame(np.arange(600.0))
+    frame.assign(gx=frame["rate"], gx_compensated=-frame["rate"]).drop(columns="rate").to_csv(folder / "gx.csv", index=False)
+    frame.assign(gx=frame["rate"], **{"gy/../../X": -frame["rate"]}).drop(columns="rate").to_csv(folder / "escape.csv", index=False)
+    frame.assign(gx=frame["rate"], **{"g/y": -frame["rate"]}).drop(columns="rate").to_csv(folder / "slash.csv", index=False)
 
 
 def _frame(time: np.ndarray) -> pd.DataFrame:
@@ -551,6 +566,22 @@ SWEEP_CASES = [
     ("compensate-full-huge-coefficient-overflows", "N9", ["compensate", "x.parquet", "huge.json", "--mode", "full", "--out", "c.parquet"], 2, r"huge\.json axis rate: segment [^ ]+ gives a drift of"),
     ("allan-one-sample-segment-after-a-gap", "N29", ["allan", "lone.csv", "--out", "a.json"], 2, r"lone\.csv line 601: segment 2 is one sample \(alone after a gap in `time`; the interval is 1 s\)"),
     ("diagnose-one-sample-segment-after-a-gap", "N29", ["diagnose", "lone.csv", "--out", "d.json"], 2, r"lone\.csv line 601: segment 2 is one sample \(`time` = 629\.0, 31 s after the previous sample, the last sample; the interval is 1 s\)"),
+    ("simulate-lag-tau-nan", "N8", ["simulate", "--set", "gyro.thermal_lag.tau_s=nan", "--out", "s.parquet"], 2, r"gyro\.thermal_lag\.tau_s = nan: must be a finite number \[s\]$"),
+    ("simulate-period-zero", "N8", ["simulate", "--set", "gyro.periodic.period_s=0", "--out", "s.parquet"], 2, r"gyro\.periodic\.period_s = 0\.0: a time constant or period must be > 0 s$"),
+    ("simulate-offset-infinite", "N8", ["simulate", "--set", "gyro.offset_dps=inf", "--out", "s.parquet"], 2, r"gyro\.offset_dps = inf: must be a finite number \[deg/s\]$"),
+    ("simulate-chamber-tau-nan", "N8", ["simulate", "--set", "profile.chamber_tau_s=nan", "--out", "s.parquet"], 2, r"profile\.chamber_tau_s = nan: must be a finite number"),
+    ("allan-resample-a-29-day-gap-at-1-khz", "N18", ["allan", "month_gap.csv", "--resample", "--out", "a.json"], 2, r"month_gap\.csv: --resample onto a 0\.001 s grid over 2\.5056e\+06 s of `time` needs 2\.506e\+09 samples, more than resample_max_samples = 1000000000 \(configs/recordings\.toml \[lengths\]\)"),
+    ("compensate-resample-a-29-day-gap-at-1-khz", "N18", ["compensate", "month_gap.csv", "m.json", "--resample", "--out", "c.parquet"], 2, r"month_gap\.csv: --resample onto a 0\.001 s grid .* more than resample_max_samples = 1000000000"),
+    ("simulate-duration-1e10-s", "N25", ["simulate", "--set", "run.duration_s=1e10", "--out", "s.parquet"], 2, r"simulate: 1e\+10 s at 1 Hz needs 1e\+10 samples, more than simulate_max_samples = 1000000000 \(configs/recordings\.toml \[lengths\]\)"),
+    ("simulate-hold-1e10-s", "N25", ["simulate", "--set", "profile.hold_s=[1e10]", "--out", "s.parquet"], 2, r"more than simulate_max_samples = 1000000000"),
+    ("export-c-two-billion-vectors", "N26", ["export", "m.json", "--format", "c", "--n-vectors", "2000000000", "--out", "m.h"], 2, r"m\.json: export --n-vectors 2000000000 needs 2e\+09 samples, more than export_max_vectors = 1000000000 \(configs/recordings\.toml \[lengths\]\)"),
+    ("export-c-zero-vectors", "N26", ["export", "m.json", "--format", "c", "--n-vectors", "0", "--out", "m.h"], 2, r"export --n-vectors 0: must be >= 1"),
+    ("compensate-axis-named-like-another-axis-output", "N10", ["compensate", "gx.csv", "gx.json", "--rate-col", "gx*", "--out", "c.parquet"], 2, r"gx\.csv: the compensated column of axis gx would be `gx_compensated`, which is axis gx_compensated; rename the column or leave it out of --rate-col"),
+    ("compensate-streamed-axis-named-like-another-axis-output", "N10", ["compensate", "gx.csv", "gx.json", "--rate-col", "gx*", "--out", "-"], 2, r"gx\.csv: the compensated column of axis gx would be `gx_compensated`"),
+    ("allan-unsigned-us-stamps-reset-below-the-first", "N11", ["allan", "reset_us.parquet", "--time-col", "timestamp", "--time-unit", "us", "--out", "a.json"], 2, r"reset_us\.parquet row 601: `timestamp` = -1699999999\.99999\d* goes back from the previous time 5\.98999\d*; time must be strictly increasing"),
+    ("train-unsigned-us-stamps-reset-below-the-first", "N11", ["train", "reset_us.parquet", "--time-col", "timestamp", "--time-unit", "us", "--config", "polynomial", "--out", "m2.json"], 2, r"reset_us\.parquet row 601: `timestamp` = -1699999999\.99999\d* goes back"),
+    ("run-axis-named-to-escape-the-output-folder", "N12", ["run", "compare", "escape.csv", "--rate-col", "g*", "--out", "r"], 2, r"escape\.csv: axis 'gy/\.\./\.\./X' cannot name a file or folder \(a path separator, or \. or \.\.\); rename the column"),
+    ("diagnose-axis-with-a-slash-and-a-plot", "N21", ["diagnose", "slash.csv", "--rate-col", "gx,g/y", "--plot", "gap.png", "--markdown", "d.md", "--out", "d.json"], 2, r"slash\.csv: axis 'g/y' cannot name a file or folder"),
     ("run-test-is-the-training-run", "N2", ["run", "compare", "x.parquet", "--test", "h.parquet", "--out", "r"], 2, r"h\.parquet: the same bytes as x\.parquet"),
 ]
 
@@ -594,3 +625,98 @@ def test_firmware_parameters_beyond_single_precision_are_refused():
         px4_params({"x": narrow}, device_id=1)
     with pytest.raises(InputError, match=r"^export: INS_TCAL1_GYR3_X = 5\.23\d*e\+44 is beyond single precision"):
         ardupilot_params({"x": narrow})
+
+
+@pytest.mark.slow
+def test_a_vector_sweep_longer_than_30_days_is_no_implausible_time_base(trained_model):
+    """N26: 2.6e6 vectors of a 1 Hz model span 30 days; the synthetic sweep's time is seconds by declaration (it tripped the reader's check)."""
+    from gyrocomp.export import reference_vectors
+    from gyrocomp.pipeline.compensate import load_models
+
+    import json
+
+    (model,) = load_models(json.loads(trained_model.read_text())).values()
+    vectors = reference_vectors(model, n=2_600_000)
+    assert vectors["temperature_c"].size == 2_600_000
+    np.testing.assert_allclose(vectors["rate_dps"] - vectors["drift_dps"], vectors["compensated_dps"], rtol=0, atol=1e-12)
+
+
+def test_batch_folder_names_never_collide():
+    """N15: an input named like another's hashed folder (``x-5c400309.csv`` beside ``a/x.csv``, ``b/x.csv``) gets a folder of its own."""
+    import hashlib
+
+    from gyrocomp.batch import folder_names
+
+    hashed = "x-" + hashlib.sha256(b"a/x.csv").hexdigest()[:8]
+    paths = ["a/x.csv", "b/x.csv", f"{hashed}.csv", "c/X.csv"]
+    names = folder_names(paths)
+    assert len({n.casefold() for n in names.values()}) == len(paths), names
+    assert folder_names(["a/x.csv", "b/y.csv"]) == {"a/x.csv": "x", "b/y.csv": "y"}
+
+
+def test_batch_repeatable_holdout_template_is_paired_per_input(tmp_path):
+    """N16: ``batch diagnose --holdout 'hold/{name}'`` (a repeatable option: a tuple) pairs each input with its holdout."""
+    from gyrocomp.batch import jobs
+
+    (tmp_path / "hold").mkdir()
+    (tmp_path / "hold" / "u1.csv").write_text("time,rate\n")
+    source = tmp_path / "fit" / "u1.csv"
+    paired = jobs._paired((str(tmp_path / "hold" / "{name}"),), source, "--holdout")
+    assert paired == (tmp_path / "hold" / "u1.csv",)
+    records = jobs._paired_records(jobs.get_job("diagnose"), jobs.get_job("diagnose").options_class(holdout=(str(tmp_path / "hold" / "{name}"),)), source)
+    assert [r["name"] for r in records["--holdout"]] == ["u1.csv"]
+
+
+@pytest.mark.parametrize("template", ["hold/{dir.__class__}", "hold/{name!r}", "hold/{stem:>40}", "hold/{0}", "hold/{name"])
+def test_batch_template_allows_only_its_placeholders(template):
+    """N27: a template is text with {stem}, {name}, {dir}; attribute access, conversions and format specs are refused."""
+    from gyrocomp.batch.jobs import paired_path
+
+    with pytest.raises(InputError, match=r"^batch: --test 'hold/\{.*: (unknown placeholder|a brace that is no placeholder)"):
+        paired_path(template, Path("fit/u1.csv"))
+    assert paired_path("hold/{dir}/{stem}.parquet", Path("fit/u1.csv")) == Path("hold/fit/u1.parquet")
+
+
+def test_batch_glob_does_not_follow_folder_links(tmp_path, monkeypatch):
+    """N32: ``logs/**/*.csv`` with a link from inside ``logs`` back to it lists each recording once."""
+    from gyrocomp.batch import expand_inputs
+
+    (tmp_path / "logs" / "sub").mkdir(parents=True)
+    (tmp_path / "logs" / "a.csv").write_text("x\n")
+    (tmp_path / "logs" / "sub" / "b.csv").write_text("x\n")
+    os.symlink("..", tmp_path / "logs" / "sub" / "up")
+    os.symlink(tmp_path / "logs", tmp_path / "via")
+    monkeypatch.chdir(tmp_path)
+    assert expand_inputs(["logs/**/*.csv"]) == ["logs/a.csv", "logs/sub/b.csv"]
+    assert expand_inputs(["via/**/*.csv"]) == ["via/a.csv", "via/sub/b.csv"]  # a link the user typed is followed
+
+
+def test_batch_summary_csv_defuses_formulas(tmp_path):
+    """N33: a text cell starting with =, +, -, @ is written to summary.csv with a leading ' (spreadsheets show it as text)."""
+    from gyrocomp.batch import BatchResult, _write_summary
+
+    rows = [{"input": "=HYPERLINK(\"http://x\")", "output": "@x", "status": "ok", "error": "", "threshold": "", "sha256": "ab", "figure": -1.5}]
+    result = BatchResult(command="allan", rows=rows, columns=[*rows[0]], exit_code=0)
+    _write_summary(tmp_path, result, {})
+    frame = pd.read_csv(tmp_path / "summary.csv")
+    assert frame["input"][0] == "'=HYPERLINK(\"http://x\")" and frame["output"][0] == "'@x" and frame["figure"][0] == -1.5
+    assert pd.read_parquet(tmp_path / "summary.parquet")["input"][0] == "=HYPERLINK(\"http://x\")"
+
+
+def test_compensate_stream_outputs_never_overwrite_the_model(tmp_path, monkeypatch, trained_model):
+    """N13: with several streams of a flight log, ``<out>_<stream>.json`` is checked like every output: it may not be the model."""
+    from gyrocomp import recordings
+    from gyrocomp.commands import compensate as stage
+
+    frame = _frame(np.arange(600.0))
+    streams = [recordings.recording_from_frame(frame, name="two.ulg", metadata={"stream": key}) for key in ("s0", "s1")]
+    monkeypatch.setattr(recordings, "read_recordings", lambda *args, **kwargs: streams)
+    model = tmp_path / "c_s1.json"
+    model.write_bytes(trained_model.read_bytes())
+    (tmp_path / "two.ulg").write_bytes(b"")
+    before = _snapshot(tmp_path)
+    with pytest.raises(InputError, match=r"c_s1\.json: the output would overwrite the input .*c_s1\.json"):
+        stage.to_files([tmp_path / "two.ulg", model], tmp_path / "c.parquet")
+    assert _snapshot(tmp_path) == before
+    with pytest.raises(InputError, match=r"stream 'a/b' cannot name a file or folder"):
+        stage.stream_path(tmp_path / "c.parquet", "a/b")

@@ -193,6 +193,7 @@ def test_time_limits_equal_the_shipped_config():
     assert bind(recordings.AxisLimits, table["axes"], "recordings.toml") == recordings.AxisLimits()
     assert recordings.file_limits() == compressed.FileLimits()
     assert bind(recordings.TemperatureLimits, table["temperature"], "recordings.toml") == recordings.TemperatureLimits()
+    assert recordings.length_limits() == recordings.LengthLimits()
 
 
 @pytest.mark.skipif(not LSM6DSM.exists(), reason="shared real data absent")

@@ -167,30 +167,50 @@ def expand_inputs(patterns: Sequence[str | os.PathLike]) -> list[str]:
     for pattern in patterns:
         pattern = os.fspath(pattern)
         if glob.has_magic(pattern):
-            found.update(p for p in glob.glob(pattern, recursive=True) if not os.path.isdir(p))
+            found.update(p for p in glob.glob(pattern, recursive=True) if not os.path.isdir(p) and not _through_link(p, pattern))
         else:
             found.add(pattern)
     return sorted(found)
 
 
+def _through_link(path: str, pattern: str) -> bool:
+    """Whether a match of `pattern` lies under a symbolic link to a folder below the pattern's fixed part.
+
+    ``**`` follows such links (a link to ``..`` made one recording 41
+    inputs); the fixed part the user typed may hold links.
+    """
+    parts = Path(pattern).parts
+    fixed = next((i for i, part in enumerate(parts) if glob.has_magic(part)), len(parts))
+    folder = Path(*Path(path).parts[:fixed]) if fixed else Path(".")
+    for part in Path(path).parts[fixed:-1]:
+        folder = folder / part
+        if folder.is_symlink():
+            return True
+    return False
+
+
 def folder_names(paths: Sequence[str]) -> dict[str, str]:
-    """Output folder name of each input: its stem; stems shared by several inputs get a hash suffix.
+    """Output folder name of each input: its stem; names shared by several inputs get a hash suffix.
 
     ``a/x.csv`` and ``b/x.csv`` become ``x-<8 hex>`` each, the hex the start
     of the SHA-256 of the path as given, so a name depends on nothing but
-    the inputs that share its stem. A stem that is one of the batch's own
-    files (``summary.csv.parquet`` has the stem ``summary.csv``) gets the
-    suffix too.
+    the inputs that share it. A stem that is one of the batch's own files
+    (``summary.csv.parquet`` has the stem ``summary.csv``) gets the suffix
+    too. Names are compared without case (a case-insensitive file system
+    holds one of ``X`` and ``x``); when a suffixed name meets another input's
+    name (an input called ``x-5c400309.csv``), every input sharing it takes
+    a longer suffix, until all differ.
     """
-    stems = {}
-    for p in paths:
-        stems.setdefault(_safe(Path(p).stem), []).append(p)
-    names = {}
-    for stem, members in stems.items():
-        for p in members:
-            clash = len(members) > 1 or stem in RESERVED
-            suffix = "-" + hashlib.sha256(os.fspath(p).encode()).hexdigest()[:8] if clash else ""
-            names[p] = stem + suffix
+    names = {p: _safe(Path(p).stem) for p in paths}
+    for length in (8, 16, 32, 64):
+        shared: dict[str, list] = {}
+        for p, name in names.items():
+            shared.setdefault(name.casefold(), []).append(p)
+        clashes = [p for key, members in shared.items() for p in members if len(members) > 1 or key in RESERVED]
+        if not clashes:
+            break
+        for p in clashes:
+            names[p] = _safe(Path(p).stem) + "-" + hashlib.sha256(os.fspath(p).encode()).hexdigest()[:length]
     return names
 
 
@@ -256,7 +276,21 @@ def _write_summary(out: Path, result: BatchResult, settings: dict) -> None:
         settings={"command": result.command, **settings},
     )
     artefacts.write_table(out / "summary.parquet", frame, header)
-    artefacts.write_table(out / "summary.csv", frame, header)
+    artefacts.write_table(out / "summary.csv", _no_formulas(frame), header)
+
+
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+"""First characters a spreadsheet reads as a formula in a text cell (OWASP "CSV injection")."""
+
+
+def _no_formulas(frame):
+    """The summary for ``summary.csv``: a text cell starting like a formula gets a leading ``'``, which spreadsheets show as text."""
+    frame = frame.copy()
+    for column in frame.columns:
+        values = list(frame[column])
+        if any(isinstance(v, str) and v.startswith(FORMULA_STARTS) for v in values):
+            frame[column] = [f"'{v}" if isinstance(v, str) and v.startswith(FORMULA_STARTS) else v for v in values]
+    return frame
 
 
 @contextlib.contextmanager

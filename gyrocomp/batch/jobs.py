@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 from pathlib import Path
 from typing import Callable
 
@@ -185,7 +186,10 @@ def _paired_records(job: Job, options, source: Path) -> dict:
     records = {}
     for option, flag in job.paired:
         path = _paired(getattr(options, option), source, flag)
-        if path is not None:
+        if isinstance(path, tuple):
+            if path:
+                records[flag] = [file_record(p) for p in path]
+        elif path is not None:
             records[flag] = file_record(path)
     return records
 
@@ -316,13 +320,30 @@ def paired_path(template: str | None, source: Path, option: str = "--test") -> P
     """
     if template is None:
         return None
-    try:
-        return Path(str(template).format(stem=source.stem, name=source.name, dir=source.parent))
-    except (KeyError, IndexError, ValueError) as err:
-        raise InputError(f"batch: {option} {template!r}: bad placeholder ({err}); use {{stem}}, {{name}} or {{dir}}") from None
+    values = {"stem": source.stem, "name": source.name, "dir": os.fspath(source.parent)}
+
+    def fill(match):
+        if match.group(1) not in values:
+            raise InputError(f"batch: {option} {template!r}: unknown placeholder {match.group(0)}; use {{stem}}, {{name}} or {{dir}}")
+        return values[match.group(1)]
+
+    if _stray_brace(str(template)):
+        raise InputError(f"batch: {option} {template!r}: a brace that is no placeholder; use {{stem}}, {{name}} or {{dir}}")
+    return Path(_PLACEHOLDER.sub(fill, str(template)))  # plain text substitution: no attribute access, no format spec
 
 
-def _paired(template: str | None, source: Path, option: str) -> Path | None:
+_PLACEHOLDER = re.compile(r"\{([^{}]*)\}")
+
+
+def _stray_brace(template: str) -> bool:
+    """Whether a template holds a brace outside ``{word}`` placeholders."""
+    return "{" in _PLACEHOLDER.sub("", template) or "}" in _PLACEHOLDER.sub("", template)
+
+
+def _paired(template, source: Path, option: str):
+    """The paired recording(s) of `source`: a path, or a tuple of them for a repeatable option (``diagnose --holdout``)."""
+    if isinstance(template, (tuple, list)):
+        return tuple(_paired(one, source, option) for one in template)
     path = paired_path(template, source, option)
     if path is not None and not path.is_file():
         raise InputError(f"{source}: its {option} recording {path} does not exist")

@@ -102,6 +102,14 @@ def to_files(
     if len(streams) > 1 and str(out) == "-":
         keys = ", ".join(rec.metadata["stream"] for rec in streams)
         raise InputError(f"{recording_path}: {keys} have their own time stamps, one table each; give --out a file, not -")
+    if len(streams) > 1:  # one table, sidecar and plot per stream: what is written is known only now
+        from gyrocomp.commands import check_paths
+
+        outputs = []
+        for rec in streams:
+            table = stream_path(out, rec.metadata["stream"])
+            outputs += [table, table.with_suffix(".json"), None if options.plot is None else stream_path(options.plot, rec.metadata["stream"])]
+        check_paths(inputs, options, outputs)
     groups, summaries = [], {}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -118,8 +126,10 @@ def to_files(
 
 def stream_path(path: str | os.PathLike, stream: str) -> Path:
     """The output of one stream of a flight log: `path` with ``_<stream>`` before its suffix."""
+    from gyrocomp.artefacts import name_part
+
     path = Path(path)
-    return path.with_name(f"{path.stem}_{stream}{path.suffix}")
+    return path.with_name(f"{path.stem}_{name_part(stream, f'{path}: stream')}{path.suffix}")
 
 
 def _compensate_stream(recording, pairs: dict, models: dict, out, plot, model_path: Path, options: Options, progress) -> tuple:
@@ -368,7 +378,28 @@ def _pair_axes(recording, models: dict, name: str, *, alone: bool = True) -> dic
         pairs = {axis: models[axis] for axis in recording.axis_names}
     for axis, model in pairs.items():
         units.check_compensates(model, recording.axis(axis).axes[0].unit, recording.name, axis)
+    _check_output_names(recording, list(pairs))
     return pairs
+
+
+def _check_output_names(recording, axes: list) -> None:
+    """Refuse axes whose output columns (:func:`output_name`) would take the name of another column of the table.
+
+    ``gx`` beside ``gx_compensated`` (``--rate-col 'gx*'``) would write the
+    first axis' compensated values over the second axis' raw ones.
+    """
+    from gyrocomp.errors import InputError
+
+    taken = {"time": "the time", "temperature": "the temperature", **{axis: f"axis {axis}" for axis in axes}}
+    for axis in axes:
+        for what in ("drift_model", "compensated"):
+            column = output_name(axis, what)
+            if column in taken:
+                raise InputError(
+                    f"{recording.name}: the {what} column of axis {axis} would be `{column}`, which is {taken[column]}; "
+                    "rename the column or leave it out of --rate-col"
+                )
+            taken[column] = f"the {what} column of axis {axis}"
 
 
 def _model_axis(models: dict, model):

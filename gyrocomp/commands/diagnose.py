@@ -93,6 +93,9 @@ def to_files(
         )
 
     fit_rec = read(fit)
+    if options.plot is not None and len(fit_rec.axes) > 1:  # one plot per axis, named by it: checked before anything is written
+        for axis in fit_rec.axis_names:
+            artefacts.name_part(axis, f"{fit}: axis")
     holdouts = [options.holdout] if isinstance(options.holdout, (str, os.PathLike)) else list(options.holdout or ())
     hold_recs = [read(path) for path in holdouts]
     recordings.check_distinct([fit_rec, *hold_recs])

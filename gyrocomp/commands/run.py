@@ -133,6 +133,9 @@ def to_files(inputs: Sequence[str | os.PathLike], out_dir: str | os.PathLike, op
     if held_out and test_all.axis_names != names:
         raise InputError(f"{options.test}: axes {', '.join(test_all.axis_names)} differ from the training run's ({', '.join(names)})")
     several = len(names) > 1
+    if several:  # each axis gets a folder of its name: refuse one that would lie elsewhere, before anything is written
+        for axis in names:
+            artefacts.name_part(axis, f"{train_path}: axis")
     first = test_all.axis(names[0])
     signal, parts = evaluate.injected_signal(first.time_s, first.fs_hz, signal_settings)
 

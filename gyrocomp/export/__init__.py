@@ -124,6 +124,9 @@ def reference_vectors(model, recording=None, n: int = 2048) -> dict:
     from gyrocomp import recordings
     from gyrocomp.pipeline.compensate import ExtrapolationWarning, compensate
 
+    if not 1 <= n:
+        raise InputError(f"export --n-vectors {n}: must be >= 1")
+    recordings.check_length("export_max_vectors", n, f"export --n-vectors {n}")
     if recording is None:
         (t_lo, t_hi), (r_lo, r_hi) = model.temperature_range_c, model.rate_range_c_per_s
         fs = float(model.obj["fs_hz"])
@@ -135,7 +138,8 @@ def reference_vectors(model, recording=None, n: int = 2048) -> dict:
         import pandas as pd
 
         frame = pd.DataFrame({"time": k / fs, "rate": 0.3 * np.sin(2 * np.pi * 7 * k / n), "temperature": temperature})
-        recording = recordings.recording_from_frame(frame, name="sweep")
+        # time in seconds by declaration: a long sweep at a slow rate is no implausible time base
+        recording = recordings.recording_from_frame(frame, name="sweep", columns=recordings.ColumnSpec(time_unit="s"))
     else:
         recording = recordings.recording_from_frame(recording.data.iloc[:n].reset_index(drop=True), name=recording.name)
     with warnings.catch_warnings():

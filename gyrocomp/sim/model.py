@@ -20,7 +20,7 @@ from pathlib import Path
 
 from gyrocomp.config import CONFIG_DIR, apply_overrides, bind, check_seed, load_config
 from gyrocomp.errors import InputError
-from gyrocomp.effects._fields import unit_field
+from gyrocomp.effects._fields import check_numbers, unit_field
 from gyrocomp.sim.profile import ProfileSettings
 from gyrocomp.effects.vocabulary import EFFECTS, KINDS
 from gyrocomp.effects.vocabulary.bias_instability import BiasInstability
@@ -81,6 +81,10 @@ class _Baseline:
             if not value >= 0:
                 raise InputError(f"gyro.{name} = {value!r} must be >= 0")
 
+        check_numbers(self, "gyro")
+        for name in KINDS:
+            check_numbers(getattr(self, name), f"gyro.{name}")
+
     def active_effects(self) -> list[str]:
         """Names of the enabled effects, in vocabulary order."""
         return [name for name in EFFECTS if getattr(self, name).enabled]
@@ -110,6 +114,7 @@ class ReferenceSettings:
     period_s: float = unit_field(60.0, "s")
 
     def __post_init__(self):
+        check_numbers(self, "reference")
         if self.kind not in ("none", "steps", "sine"):
             raise InputError(f"reference.kind = {self.kind!r}; choose none, steps or sine")
         if self.kind == "steps" and (not self.levels_dps or not self.step_s > 0):

@@ -22,7 +22,7 @@ import dataclasses
 import numpy as np
 
 from gyrocomp.errors import InputError
-from gyrocomp.effects._fields import unit_field
+from gyrocomp.effects._fields import check_numbers, unit_field
 from gyrocomp.effects.shapes import element_temperature
 
 __all__ = ["ProfileSettings", "Profile", "setpoint", "profile_duration_s", "temperature_profile", "measure", "profile_from_recording"]
@@ -46,6 +46,7 @@ class ProfileSettings:
     sensor_resolution_c: float = unit_field(0.0625, "degC")
 
     def __post_init__(self):
+        check_numbers(self, "profile")
         n = len(self.levels_c)
         for name in ("hold_s", "ramp_c_per_min"):
             values = getattr(self, name)

@@ -213,15 +213,23 @@ def _profile_on_grid(profile, fs_hz, duration_s, rng) -> Profile:
         if fs_hz is None:
             raise InputError("simulate: fs_hz is needed for a profile given by settings")
         length = duration_s or profile_duration_s(profile)
-        time_s = np.arange(int(np.floor(length * fs_hz + 1e-9)) + 1) / fs_hz
-        return temperature_profile(profile, time_s, rng)
+        return temperature_profile(profile, _grid(length, fs_hz), rng)
     if not isinstance(profile, Profile):
         raise InputError(f"simulate: profile must be ProfileSettings or Profile, not {type(profile).__name__}")
     if fs_hz is None and not duration_s:
         return profile
     fs = fs_hz if fs_hz is not None else 1.0 / float(np.median(np.diff(profile.time_s)))
     length = duration_s or float(profile.time_s[-1])
-    return profile.on_grid(np.arange(int(np.floor(length * fs + 1e-9)) + 1) / fs)
+    return profile.on_grid(_grid(length, fs))
+
+
+def _grid(length_s: float, fs_hz: float) -> np.ndarray:
+    """Sample times [s] of a run of `length_s` at `fs_hz`; refused beyond ``simulate_max_samples`` (``configs/recordings.toml`` ``[lengths]``)."""
+    from gyrocomp.recordings import check_length
+
+    n = np.floor(length_s * fs_hz + 1e-9) + 1
+    check_length("simulate_max_samples", n, f"simulate: {length_s:.6g} s at {fs_hz:g} Hz")
+    return np.arange(int(n)) / fs_hz
 
 
 def _truth(gyro: GyroSettings, profile, temps: Profile, fs, n, reference) -> dict:
