@@ -392,7 +392,11 @@ def parquet_header(name: str, meta: dict | None) -> dict:
 
 @contextlib.contextmanager
 def open_input(name: str) -> Iterator[BinaryIO]:
-    """``open(name, "rb")``, its failures as one-line :class:`InputError` naming the file."""
+    """``open(name, "rb")``, its failures as one-line :class:`InputError` naming the file.
+
+    A device (``/dev/zero``, a disk) is refused: it has no end, or is no
+    file; a FIFO (``<(zcat log.gz)``) is read like a file.
+    """
     try:
         fh = open(name, "rb")
     except FileNotFoundError:
@@ -402,6 +406,9 @@ def open_input(name: str) -> Iterator[BinaryIO]:
     except PermissionError:
         raise InputError(f"{name}: permission denied") from None
     with fh:
+        mode = os.fstat(fh.fileno()).st_mode
+        if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):  # /dev/zero never ends, /dev/sda is no recording
+            raise InputError(f"{name}: is a device, not a file (give - to read standard input)")
         yield fh
 
 

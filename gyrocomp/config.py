@@ -72,16 +72,22 @@ def load_config(path: str | os.PathLike) -> dict:
     InputError
         No such file, or invalid TOML (with the line the parser names).
     """
+    from gyrocomp.artefacts import open_input
+
     candidate = Path(path)
-    if not candidate.exists() and candidate.suffix == "" and not candidate.parent.name:
-        candidate = CONFIG_DIR / f"{candidate.name}.toml"
+    if not candidate.is_file() and candidate.suffix == "" and not candidate.parent.name:
+        candidate = CONFIG_DIR / f"{candidate.name}.toml"  # a bare name is a shipped config, whatever folder ./<name> may be
     try:
-        with open(candidate, "rb") as fh:
+        with open_input(os.fspath(candidate)) as fh:
             return tomllib.load(fh)
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such config file") from None
+    except InputError as err:
+        if "no such file" in str(err):
+            raise InputError(f"{path}: no such config file") from None
+        raise
     except tomllib.TOMLDecodeError as err:
         raise InputError(f"{path}: invalid TOML ({err})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a UTF-8 text file (TOML is UTF-8)") from None
 
 
 def apply_overrides(config: dict, assignments: Iterable[str]) -> dict:
@@ -105,6 +111,9 @@ def apply_overrides(config: dict, assignments: Iterable[str]) -> dict:
             node = node.setdefault(part, {})
             if not isinstance(node, dict):
                 raise InputError(f"--set {assignment!r}: {part!r} is not a table")
+        if not isinstance(value, dict) and isinstance(node.get(parts[-1]), dict):
+            # a table replaced by a number (`model=5`) would reach the stage as one
+            raise InputError(f"--set {assignment!r}: {key.strip()} is a table; set one of its keys ({key.strip()}.<key>=value)")
         node[parts[-1]] = value
     return result
 

@@ -39,12 +39,16 @@ References
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import fnmatch
+import io
+import warnings
+from typing import Iterator
 
 import numpy as np
 
-from gyrocomp.errors import InputError
+from gyrocomp.errors import InputError, RecordingNote
 
 __all__ = ["read_log", "read_logs"]
 
@@ -165,10 +169,44 @@ def read_logs(name: str, kind: str, spec) -> list[tuple]:
     return found
 
 
+class _Printed(io.TextIOBase):
+    """A text stream that keeps what a library prints: the number of lines and the first one."""
+
+    def __init__(self):
+        self.lines = 0
+        self.first = ""
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, text: str) -> int:
+        if not self.first and text.strip():
+            self.first = text.strip().splitlines()[0]
+        self.lines += text.count("\n")
+        return len(text)
+
+
+@contextlib.contextmanager
+def _quiet(name: str, library: str) -> Iterator[None]:
+    """Keep what `library` prints (pyulog's warnings go to stdout, pymavlink prints per message) out of the tool's output.
+
+    ``--out -`` writes data to stdout, which a library's print would corrupt.
+    What it printed becomes one :class:`~gyrocomp.errors.RecordingNote`
+    (its line count and first line) when the reading succeeds; an error
+    is one line on its own.
+    """
+    printed = _Printed()
+    with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(printed):
+        yield
+    if printed.lines or printed.first:
+        warnings.warn(f"{name}: {library} printed {max(printed.lines, 1)} lines while reading it, the first: {printed.first[:200]}", RecordingNote, stacklevel=3)
+
+
 def _read_ulog(name: str) -> list[_Stream]:
     pyulog = _require("pyulog", name)
     try:
-        log = pyulog.ULog(name, list(ULOG_TOPICS))
+        with _quiet(name, "pyulog"):
+            log = pyulog.ULog(name, list(ULOG_TOPICS))
     except Exception as err:  # pyulog raises bare exceptions on a damaged file
         raise InputError(f"{name}: not a readable ULog file ({type(err).__name__}: {err})") from None
     streams = []
@@ -188,6 +226,22 @@ def _read_dataflash(name: str) -> list[_Stream]:
     _require("pymavlink", name)
     from pymavlink import DFReader
 
+    with _quiet(name, "pymavlink"):
+        rows = _dataflash_rows(name, DFReader)
+    fields = ["TimeUS", *DATAFLASH_FIELDS, "T"]
+    streams = []
+    for instance in sorted(rows):
+        table = np.array(rows[instance], dtype=float)
+        prefix = f"IMU_{instance}_"
+        columns = {prefix + f: table[:, k + 1] for k, f in enumerate(fields[1:]) if not np.isnan(table[:, k + 1]).all()}
+        units = {prefix + f: u for f, u in DATAFLASH_FIELDS.items()}
+        time_us = np.array([r[0] for r in rows[instance]], dtype=np.int64)
+        streams.append(_Stream(f"IMU instance {instance}", prefix[:-1], time_us, columns, units))
+    return streams
+
+
+def _dataflash_rows(name: str, DFReader) -> dict[int, list]:
+    """The IMU rows of a DataFlash log by instance: TimeUS, the DATAFLASH_FIELDS, T."""
     try:
         log = DFReader.DFReader_binary(name, zero_time_base=True)
     except Exception as err:  # pymavlink raises bare exceptions on a damaged file
@@ -205,15 +259,7 @@ def _read_dataflash(name: str) -> list[_Stream]:
         instance = int(getattr(msg, "I", 0)) if kind == "IMU" else int(kind[-1]) - 1
         rows.setdefault(instance, []).append([getattr(msg, f, np.nan) for f in fields])
     log.close()
-    streams = []
-    for instance in sorted(rows):
-        table = np.array(rows[instance], dtype=float)
-        prefix = f"IMU_{instance}_"
-        columns = {prefix + f: table[:, k + 1] for k, f in enumerate(fields[1:]) if not np.isnan(table[:, k + 1]).all()}
-        units = {prefix + f: u for f, u in DATAFLASH_FIELDS.items()}
-        time_us = np.array([r[0] for r in rows[instance]], dtype=np.int64)
-        streams.append(_Stream(f"IMU instance {instance}", prefix[:-1], time_us, columns, units))
-    return streams
+    return rows
 
 
 def _require(module: str, name: str):

@@ -495,6 +495,7 @@ def _setup_sweep(folder: Path, files: Path, model: Path) -> None:
     for path in files.iterdir():
         shutil.copy(path, folder / path.name)
     (folder / "m.json").write_bytes(model.read_bytes())
+    (folder / "utf16.toml").write_bytes('[pipeline]\nkind = "polynomial"\n'.encode("utf-16"))
     for name, unit in (("acc.json", "m/s^2"), ("furlong.json", "furlong/fortnight")):
         obj = json.loads(model.read_text())
         obj["axes"]["rate"]["unit"] = unit
@@ -520,6 +521,10 @@ def _setup_sweep(folder: Path, files: Path, model: Path) -> None:
     obj = json.loads(model.read_text())
     obj["axes"] = {"gx": obj["axes"]["rate"], "gx_compensated": obj["axes"]["rate"]}
     (folder / "gx.json").write_text(json.dumps(obj))
+    for name, axes in (("cased.json", ("gx", "GX")), ("hyphen.json", ("gx", "g-y"))):
+        obj = json.loads(model.read_text())
+        obj["axes"] = {axis: obj["axes"]["rate"] for axis in axes}
+        (folder / name).write_text(json.dumps(obj))
     frame = _frame(np.arange(600.0))
     frame.assign(gx=frame["rate"], gx_compensated=-frame["rate"]).drop(columns="rate").to_csv(folder / "gx.csv", index=False)
     frame.assign(gx=frame["rate"], **{"gy/../../X": -frame["rate"]}).drop(columns="rate").to_csv(folder / "escape.csv", index=False)
@@ -582,6 +587,14 @@ SWEEP_CASES = [
     ("train-unsigned-us-stamps-reset-below-the-first", "N11", ["train", "reset_us.parquet", "--time-col", "timestamp", "--time-unit", "us", "--config", "polynomial", "--out", "m2.json"], 2, r"reset_us\.parquet row 601: `timestamp` = -1699999999\.99999\d* goes back"),
     ("run-axis-named-to-escape-the-output-folder", "N12", ["run", "compare", "escape.csv", "--rate-col", "g*", "--out", "r"], 2, r"escape\.csv: axis 'gy/\.\./\.\./X' cannot name a file or folder \(a path separator, or \. or \.\.\); rename the column"),
     ("diagnose-axis-with-a-slash-and-a-plot", "N21", ["diagnose", "slash.csv", "--rate-col", "gx,g/y", "--plot", "gap.png", "--markdown", "d.md", "--out", "d.json"], 2, r"slash\.csv: axis 'g/y' cannot name a file or folder"),
+    ("train-config-is-dev-zero", "N19", ["train", "x.parquet", "--config", "/dev/zero", "--out", "m2.json"], 2, r"/dev/zero: is a device, not a file \(give - to read standard input\)$"),
+    ("train-config-in-utf16", "N19", ["train", "x.parquet", "--config", "utf16.toml", "--out", "m2.json"], 2, r"utf16\.toml: not a UTF-8 text file \(TOML is UTF-8\)$"),
+    ("train-config-is-a-folder", "N19", ["train", "x.parquet", "--config", "out/", "--out", "m2.json"], 2, r"out/: no such config file$"),
+    ("compensate-model-is-dev-zero", "N24", ["compensate", "x.parquet", "/dev/zero", "--out", "c.parquet"], 2, r"/dev/zero: is a device, not a file"),
+    ("train-set-a-table-to-a-number", "N22", ["train", "x.parquet", "--config", "polynomial", "--set", "model=5", "--out", "m2.json"], 2, r"--set 'model=5': model is a table; set one of its keys \(model\.<key>=value\)$"),
+    ("train-reference-temperature-1e300", "N23", ["train", "x.parquet", "--config", "polynomial", "--set", "model.drift.reference_temperature=1e300", "--out", "m2.json"], 2, r"x\.parquet: PolynomialDrift: `reference_temperature` must be in \[-100\.0, 200\.0\], got 1e\+300$"),
+    ("export-c-axes-differing-only-in-case", "N31", ["export", "cased.json", "--format", "c", "--out", "m.h"], 2, r"cased\.json: export c: axes 'gx' and 'GX' differ only in case; their blocks would share the include guard GYROCOMP_GX_H$"),
+    ("export-c-axis-no-c-name", "N31", ["export", "hyphen.json", "--format", "c", "--out", "m.h"], 2, r"hyphen\.json: export c: axis 'g-y' cannot be part of a C name \(gyrocomp_g-y\); rename the axis$"),
     ("run-test-is-the-training-run", "N2", ["run", "compare", "x.parquet", "--test", "h.parquet", "--out", "r"], 2, r"h\.parquet: the same bytes as x\.parquet"),
 ]
 
@@ -720,3 +733,76 @@ def test_compensate_stream_outputs_never_overwrite_the_model(tmp_path, monkeypat
     assert _snapshot(tmp_path) == before
     with pytest.raises(InputError, match=r"stream 'a/b' cannot name a file or folder"):
         stage.stream_path(tmp_path / "c.parquet", "a/b")
+
+
+def test_a_folder_named_like_a_shipped_config_does_not_shadow_it(tmp_path, monkeypatch):
+    """N19: ``./polynomial/`` (as ``run --out .`` makes) beside ``--config polynomial``: the shipped config is read."""
+    x = _recording(tmp_path / "x.parquet")
+    (tmp_path / "polynomial").mkdir()
+    (tmp_path / "default").mkdir()
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, ["train", "x.parquet", "--config", "polynomial", "--out", "m.json"])
+    assert result.exit_code == 0, result.output
+    result = CliRunner().invoke(app, ["simulate", "--set", "run.duration_s=60", "--set", "run.gyro=default", "--out", "s.parquet"])
+    assert result.exit_code == 0, result.output
+
+
+def test_sighup_during_a_write_leaves_no_temporary_file(tmp_path):
+    """N28: an ssh hang-up (SIGHUP) inside an atomic write unwinds like SIGTERM: exit 129, one line, the temporary file removed."""
+    import subprocess
+    import sys
+
+    rec = _recording(tmp_path / "x.parquet")
+    out = tmp_path / "out"
+    script = (
+        "import os, signal, sys\n"
+        "import gyrocomp.cli as cli\n"
+        "real_fsync = os.fsync\n"
+        "def fsync(fd):\n"
+        "    os.kill(os.getpid(), signal.SIGHUP)\n"
+        "    real_fsync(fd)\n"
+        "os.fsync = fsync\n"
+        "sys.argv = ['gyrocomp', 'compensate', sys.argv[1], sys.argv[2], '--out', sys.argv[3]]\n"
+        "cli.main()\n"
+    )
+    model = tmp_path / "m.json"
+    result = CliRunner().invoke(app, ["train", str(rec), "--config", "polynomial", "--out", str(model)])
+    assert result.exit_code == 0, result.output
+    proc = subprocess.run([sys.executable, "-c", script, str(rec), str(model), str(out / "c.parquet")], capture_output=True, text=True)
+    assert proc.returncode == 129, proc.stderr
+    assert proc.stderr.strip().splitlines()[-1] == "gyrocomp: hung up"
+    assert list(out.iterdir()) == []
+
+
+def test_a_library_warning_is_one_line_without_a_source_path(tmp_path):
+    """N30: ``allan --taus 1,1e6``: the tau left out is one ``gyrocomp: warning:`` line, not Python's ``path:line: UserWarning`` and code."""
+    x = _recording(tmp_path / "x.parquet")
+    result = CliRunner().invoke(app, ["allan", str(x), "--taus", "1,1e6", "--out", str(tmp_path / "a.json")])
+    assert result.exit_code == 0, result.output
+    lines = result.stderr.strip().splitlines()
+    assert lines == ["gyrocomp: warning: taus 1e+06 s left out: a record of 600 samples reaches tau = 299 s"], lines
+
+
+PX4_SAMPLE = Path("/work/shared/real-data/px4-ulog-sample/sample_log_small.ulg")
+
+
+@pytest.mark.skipif(not PX4_SAMPLE.exists(), reason="shared real data absent")
+def test_what_a_log_library_prints_stays_out_of_stdout(tmp_path, monkeypatch):
+    """N14: pyulog prints its warnings on stdout; with ``--out -`` they would corrupt the JSON. They become one note on stderr."""
+    import json
+
+    import pyulog
+
+    real = pyulog.ULog
+
+    def noisy(*args, **kwargs):
+        for k in range(3):
+            print(f"Warning: unknown message type {k}")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(pyulog, "ULog", noisy)
+    result = CliRunner().invoke(app, ["allan", str(PX4_SAMPLE), "--out", "-"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["series"]
+    notes = [line for line in result.stderr.splitlines() if "pyulog printed" in line]
+    assert notes == [f"gyrocomp: note: {PX4_SAMPLE}: pyulog printed 3 lines while reading it, the first: Warning: unknown message type 0"], result.stderr

@@ -6,7 +6,7 @@ import importlib
 import os
 import signal
 
-from gyrocomp.cli._app import app, closed_pipe, raise_on_sigterm
+from gyrocomp.cli._app import STOP_SIGNALS, app, closed_pipe, raise_on_sigterm
 
 _COMMANDS = ("simulate", "allan", "decompose", "train", "compensate", "export", "run", "batch", "diagnose", "classify")
 """Command modules of this package; each registers its commands on ``app``."""
@@ -28,12 +28,14 @@ def main() -> None:
     unless the environment already says otherwise. This must happen before
     numpy loads.
 
-    SIGTERM (``kill``, a cron timeout, a CI job cancelled) unwinds as
-    Ctrl-C does, so no half-written temporary file is left behind.
+    SIGTERM (``kill``, a cron timeout, a CI job cancelled) and SIGHUP (an
+    ssh session hung up) unwind as Ctrl-C does, so no half-written
+    temporary file is left behind.
     """
     for variable in _BLAS_THREAD_VARIABLES:
         os.environ.setdefault(variable, "1")
-    signal.signal(signal.SIGTERM, raise_on_sigterm)
+    for signum in STOP_SIGNALS:
+        signal.signal(signum, raise_on_sigterm)
     try:
         app()
     except BrokenPipeError:  # stdout closed outside a command (e.g. `gyrocomp --help | head -1`)

@@ -92,14 +92,20 @@ def _main(
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised where the program is so that it unwinds as Ctrl-C does."""
+    """SIGTERM or SIGHUP, raised where the program is so that it unwinds as Ctrl-C does; `signum` says which."""
 
-    signum = signal.SIGTERM
+    def __init__(self, signum: int = signal.SIGTERM):
+        super().__init__(signum)
+        self.signum = signum
+
+
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
+"""Signals that end a run the way Ctrl-C does: ``kill`` (and a cron timeout, a cancelled CI job), and an ssh session hung up."""
 
 
 def raise_on_sigterm(signum, frame) -> None:
-    """SIGTERM handler: unwind (atomic writes remove their temporary files), then exit 143."""
-    raise Terminated()
+    """Handler of :data:`STOP_SIGNALS`: unwind (atomic writes remove their temporary files), then exit 128 + the signal (143, 129)."""
+    raise Terminated(signum)
 
 
 def state(ctx: typer.Context) -> State:
@@ -154,7 +160,8 @@ def report_errors(ctx: typer.Context) -> Iterator[None]:
     except BrokenPipeError:
         raise typer.Exit(closed_pipe())
     except KeyboardInterrupt as err:
-        print(f"gyrocomp: {'terminated' if isinstance(err, Terminated) else 'interrupted'}", file=sys.stderr)
+        words = {signal.SIGTERM: "terminated", signal.SIGHUP: "hung up"}
+        print(f"gyrocomp: {words.get(getattr(err, 'signum', None), 'interrupted')}", file=sys.stderr)
         raise typer.Exit(128 + getattr(err, "signum", signal.SIGINT))
     except Exception as err:
         code = err.exit_code if isinstance(err, GyrocompError) else 1
@@ -169,7 +176,7 @@ def report_errors(ctx: typer.Context) -> Iterator[None]:
 
 @contextlib.contextmanager
 def _print_notes() -> Iterator[None]:
-    """Print each :class:`~gyrocomp.errors.RecordingNote` (what reading a recording changed) as one line on stderr."""
+    """Print each :class:`~gyrocomp.errors.RecordingNote` (what reading a recording changed) and each other ``UserWarning`` as one line on stderr."""
     from gyrocomp.errors import RecordingNote
 
     with warnings.catch_warnings():
@@ -178,6 +185,9 @@ def _print_notes() -> Iterator[None]:
         def print_note(message, category, *args, **kwargs):
             if issubclass(category, RecordingNote):
                 print(f"gyrocomp: note: {message}", file=sys.stderr)
+            elif issubclass(category, UserWarning):  # one line, like an error: no source path, no code line
+                text = " ".join(str(message).split())
+                print(f"gyrocomp: warning: {text}", file=sys.stderr)
             else:
                 show(message, category, *args, **kwargs)
 

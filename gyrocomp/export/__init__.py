@@ -235,8 +235,9 @@ def _c(models: dict, options: ExportOptions):
     from gyrocomp.export.plain import plain_model
 
     blocks, counts = [], {}
+    prefixes = _c_prefixes(models, options.prefix)
     for name, model in models.items():
-        prefix = options.prefix if len(models) == 1 else f"{options.prefix}_{name}"
+        prefix = prefixes[name]
         if model.kind == "greybox":
             from gyrocomp.export.greybox_c import greybox_header, greybox_vectors
 
@@ -253,6 +254,34 @@ def _c(models: dict, options: ExportOptions):
         blocks.append(c_header(plain_model(model, centred=True), vectors, prefix=prefix))
         counts[str(name)] = len(vectors["temperature_c"])
     return "\n".join(blocks), {"n_vectors": min(counts.values()), "prefixes": len(blocks)}
+
+
+def _c_prefixes(models: dict, prefix: str) -> dict:
+    """The C name prefix of each axis' block: `prefix`, or ``<prefix>_<axis>`` for several axes.
+
+    Each must be an ASCII C identifier, and no two may differ only in case:
+    the include guard and macros are the upper-cased prefix, so the second
+    block would be compiled out.
+
+    Raises
+    ------
+    InputError
+        Naming `prefix` (``--prefix``) or the axis at fault.
+    """
+    if not (prefix.isascii() and prefix.isidentifier()):
+        raise InputError(f"--prefix {prefix!r} is not a C identifier")
+    if len(models) == 1:
+        return {next(iter(models)): prefix}
+    out, upper = {}, {}
+    for name in models:
+        full = f"{prefix}_{name}"
+        if not (full.isascii() and full.isidentifier()):
+            raise InputError(f"export c: axis {name!r} cannot be part of a C name ({full}); rename the axis")
+        if full.upper() in upper:
+            raise InputError(f"export c: axes {upper[full.upper()]!r} and {name!r} differ only in case; their blocks would share the include guard {full.upper()}_H")
+        upper[full.upper()] = name
+        out[name] = full
+    return out
 
 
 def _json_plain(models: dict, options: ExportOptions):

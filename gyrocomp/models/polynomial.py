@@ -16,6 +16,7 @@ import numpy as np
 
 from gyrocomp.errors import InputError
 from gyrocomp.models._base import Learner, check_float, check_int, check_shape, check_X_y
+from gyrocomp.recordings import PLAUSIBLE_DEGC
 
 __all__ = ["PolynomialDrift"]
 
@@ -125,7 +126,7 @@ class PolynomialDrift(Learner):
     def _check_params(self, n_features: int) -> None:
         owner = "PolynomialDrift"
         check_int(owner, "degree", self.degree, 0, 10)
-        check_float(owner, "reference_temperature", self.reference_temperature, -273.15)
+        check_float(owner, "reference_temperature", self.reference_temperature, *PLAUSIBLE_DEGC)  # a recording's temperatures: 1e300 overflowed the fit
         if not isinstance(self.rate_term, (bool, np.bool_)):
             raise InputError(f"{owner}: `rate_term` must be True or False, got {self.rate_term!r}")
         if self.rate_term and n_features < 2:

@@ -161,7 +161,7 @@ class SimConfig:
 def resolve_config_path(name: str | Path, kind: str) -> Path:
     """A config path as given, else ``configs/<kind>/<name>.toml``, else ``configs/<name>.toml``."""
     path = Path(name)
-    if path.exists():
+    if path.is_file():  # a folder or device of that name does not shadow a shipped config
         return path
     for candidate in (CONFIG_DIR / kind / f"{path.name}.toml", CONFIG_DIR / f"{name}.toml", CONFIG_DIR / kind / path.name):
         if candidate.exists():
