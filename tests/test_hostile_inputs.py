@@ -806,3 +806,18 @@ def test_what_a_log_library_prints_stays_out_of_stdout(tmp_path, monkeypatch):
     assert json.loads(result.stdout)["series"]
     notes = [line for line in result.stderr.splitlines() if "pyulog printed" in line]
     assert notes == [f"gyrocomp: note: {PX4_SAMPLE}: pyulog printed 3 lines while reading it, the first: Warning: unknown message type 0"], result.stderr
+
+
+def test_decompressed_size_is_bounded_by_its_setting(tmp_path):
+    """N17: past ``max_decompressed_gib`` the stream is refused, naming the setting (a small bound stands in for 256 GiB)."""
+    import gzip
+
+    from gyrocomp import compressed
+
+    text = _frame(np.arange(20_000.0)).to_csv(index=False).encode()
+    (tmp_path / "x.csv.gz").write_bytes(gzip.compress(text))
+    with compressed.open_csv(str(tmp_path / "x.csv.gz"), compressed.FileLimits(max_decompressed_gib=len(text) / 2**30)) as stream:
+        assert stream.read() == text  # exactly at the bound
+    with pytest.raises(InputError, match=r"x\.csv\.gz: decompresses to more than max_decompressed_gib = [0-9.e-]+ GiB \(configs/recordings\.toml \[files\]\)$"):
+        with compressed.open_csv(str(tmp_path / "x.csv.gz"), compressed.FileLimits(max_decompressed_gib=1e-4)) as stream:
+            stream.read()
