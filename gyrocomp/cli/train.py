@@ -104,7 +104,7 @@ def greybox_line(fitted: dict) -> str:
     if spec["tau_e_s"]:
         parts.append(f"thermal_lag tau {spec['tau_e_s']:.4g} s")
     if spec["rate_form"]:
-        parts.append("temp_rate" + (" heating/cooling apart" if spec["rate_form"] == 2 else ""))
+        parts.append("temp_rate" + (" heating/cooling apart" if spec["rate_form"] == 2 else "") + f" (filter {spec['rate_tau_s']:.3g} s)")
     if spec["width_c"]:
         parts.append(f"hysteresis width {spec['width_c']:.3g} degC")
     if spec["tau_w_s"]:

@@ -52,6 +52,7 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
     spec, coef = e.spec_, e.coef_
     P, U = prefix, prefix.upper()
     t_lo, t_hi = e.temperature_range_c_
+    tau_r = spec["rate_tau_s"] or 1.0  # without a dT/dt term the filter's output is unused
     poly = " + ".join(f"({P}_real){_num(coef.get(f'z{k}', 0.0))} * {'*'.join(['z'] * k)}" for k in range(1, e.degree + 1))
     terms = [f"({P}_real){_num(e.offset_)}", poly]
     if spec["rate_form"]:
@@ -66,7 +67,7 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
     lines = [
         f"/* {prefix}.h: causal grey-box gyro drift compensation, written by gyrocomp export --format c.",
         " * compensated = rate - drift(state, t, T); rate in deg/s, T in degC, t in s (any steps; a gap bridges T linearly).",
-        f" * terms: element lag tau_e = {spec['tau_e_s']:.6g} s, dT/dt filter {e.rate_tau_s:g} s, play width {spec['width_c']:.6g} degC,",
+        f" * terms: element lag tau_e = {spec['tau_e_s']:.6g} s, dT/dt filter {tau_r:g} s, play width {spec['width_c']:.6g} degC,",
         f" * warm-up tau = {spec['tau_w_s']:.6g} s (0: absent). Define GYROCOMP_REAL as float for single precision,",
         " * GYROCOMP_NO_CLAMP to extrapolate the cubic beyond the training range.",
         f" * Usage: {P}_state s; {P}_init(&s); for each sample: y = {P}_update(&s, t, T, rate); */",
@@ -101,12 +102,12 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         "    } else {",
         f"        const {P}_real h = t - s->t_prev;",
         f"        s->te = {P}_hold(s->te, s->T_prev, t_c, h, ({P}_real){_num(spec['tau_e_s'])});",
-        f"        s->tf = {P}_hold(s->tf, s->T_prev, t_c, h, ({P}_real){_num(e.rate_tau_s)});",
+        f"        s->tf = {P}_hold(s->tf, s->T_prev, t_c, h, ({P}_real){_num(tau_r)});",
         f"        if (s->p < t_c - ({P}_real){half}) s->p = t_c - ({P}_real){half};",
         f"        if (s->p > t_c + ({P}_real){half}) s->p = t_c + ({P}_real){half};",
         "    }",
         "    s->t_prev = t; s->T_prev = t_c;",
-        f"    r = (t_c - s->tf) / ({P}_real){_num(e.rate_tau_s)};",
+        f"    r = (t_c - s->tf) / ({P}_real){_num(tau_r)};",
         "    te = s->te;",
         "#ifndef GYROCOMP_NO_CLAMP",
         f"    if (te < ({P}_real){_num(t_lo)}) te = ({P}_real){_num(t_lo)};",
@@ -117,7 +118,7 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         "}",
     ]
     if not spec["rate_form"]:
-        lines.insert(lines.index(f"    r = (t_c - s->tf) / ({P}_real){_num(e.rate_tau_s)};") + 1, "    (void)r;")
+        lines.insert(lines.index(f"    r = (t_c - s->tf) / ({P}_real){_num(tau_r)};") + 1, "    (void)r;")
     if vectors is not None:
         n = len(vectors["time_s"])
         lines += ["", "#ifdef GYROCOMP_TEST_VECTORS", f"#define {U}_N_VECTORS {n}"]

@@ -15,7 +15,10 @@ the effect shapes of the vocabulary (:mod:`gyrocomp.effects.vocabulary`):
   ``T_e``, a first-order lag of the measured temperature (``tau_e``);
 * ``temp_rate``: a dT/dt sensitivity ``g``, or heating and cooling apart
   (``g + a`` heating, ``g - a`` cooling), with the causal dT/dt of a
-  first-order filter (``rate_tau_s``; :mod:`gyrocomp.effects._stateful`);
+  first-order filter whose time constant ``tau_r`` is fitted too (within
+  ``rate_tau_s``): the gradient across the part lags the sensor, and a
+  fixed filter's delay at the corners of a ramp costs more than its
+  smoothing gains (:mod:`gyrocomp.effects._stateful`);
 * ``hysteresis``: a play operator of width ``w`` (its output ``P_w`` in
   [-1, 1], :func:`gyrocomp.effects.shapes.hysteresis_play`) with its branch state;
 * ``warmup``: ``A exp(-t_on / tau_w)``, ``t_on`` the time since power-on
@@ -66,8 +69,11 @@ TERMS = ("thermal_lag", "temp_rate", "hysteresis", "warmup")
 
 VERSION = 1
 
+RATE_GRID_POINTS = 6
+"""Points of the log grid of the dT/dt filter's time constant (then refined)."""
+
 SETTLE_TAUS = 5.0
-"""The causal dT/dt starts at 0 (the filter cold); the first ``SETTLE_TAUS * rate_tau_s`` seconds of a run
+"""The causal dT/dt starts at 0 (the filter cold); the first ``SETTLE_TAUS * rate_tau_s[1]`` seconds of a run
 (of every segment when gaps are not bridged) take no part in the fit, so its settling is never read as an effect
 (e^-5: under 1 % of the true rate is missing after them)."""
 
@@ -103,13 +109,14 @@ class _Spec:
     rate_form: int = 0  # 0 none, 1 one sensitivity, 2 heating and cooling apart
     width: float = 0.0
     tau_w: float = 0.0
+    tau_r: float = 0.0  # the dT/dt filter's time constant, with rate_form
 
     def terms(self) -> list[str]:
         present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0)
         return [t for t, on in zip(TERMS, present) if on]
 
     def n_nonlinear(self) -> int:
-        return int(self.tau_e > 0) + int(self.width > 0) + int(self.tau_w > 0)
+        return int(self.tau_e > 0) + int(self.width > 0) + int(self.tau_w > 0) + int(self.rate_form > 0)
 
 
 class GreyBoxDrift:
@@ -121,8 +128,9 @@ class GreyBoxDrift:
         Powers of the element temperature.
     reference_temperature : float, default=25.0
         T_ref [degC] of the reported polynomial (``coef_about_reference_``).
-    rate_tau_s : float, default=30.0
-        Time constant of the causal dT/dt filter [s].
+    rate_tau_s : tuple of float, default=(2.0, 60.0)
+        (low, high) of the time constant of the causal dT/dt filter [s],
+        fitted with the dT/dt term (a log grid, then refined).
     terms : tuple of str
         Candidate terms, a subset of :data:`TERMS`.
     lag_tau_s, warmup_tau_s : tuple of float
@@ -174,7 +182,7 @@ class GreyBoxDrift:
         self,
         degree=3,
         reference_temperature=25.0,
-        rate_tau_s=30.0,
+        rate_tau_s=(2.0, 60.0),
         terms=TERMS,
         lag_tau_s=(10.0, 14400.0),
         warmup_tau_s=(60.0, 14400.0),
@@ -226,11 +234,11 @@ class GreyBoxDrift:
         unknown = [t for t in self.terms if t not in TERMS]
         if unknown:
             raise InputError(f"{owner}: unknown term(s) {', '.join(map(str, unknown))}; known: {', '.join(TERMS)}")
-        for name in ("rate_tau_s", "block_s", "bic_margin"):
+        for name in ("block_s", "bic_margin"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < math.inf:
                 raise InputError(f"{owner}: {name} = {value!r} must be a finite number > 0")
-        for name in ("lag_tau_s", "warmup_tau_s"):
+        for name in ("lag_tau_s", "warmup_tau_s", "rate_tau_s"):
             lo, hi = getattr(self, name)
             if not 0 < lo <= hi < math.inf:
                 raise InputError(f"{owner}: {name} = {getattr(self, name)!r} must be (low, high) with 0 < low <= high")
@@ -267,7 +275,7 @@ class GreyBoxDrift:
             search = _Search(self, prepared)
             spec, self.selection_, self.not_fitted_ = search.run()
             beta, names, noise = search.final(spec)
-        self.spec_ = {"tau_e_s": spec.tau_e, "rate_form": spec.rate_form, "width_c": spec.width, "tau_w_s": spec.tau_w}
+        self.spec_ = {"tau_e_s": spec.tau_e, "rate_form": spec.rate_form, "width_c": spec.width, "tau_w_s": spec.tau_w, "rate_tau_s": spec.tau_r}
         n_runs = len(prepared)
         self.run_offsets_ = [float(b) for b in beta[:n_runs]]
         weights = np.array([p.duration_s for p in prepared])
@@ -369,7 +377,11 @@ class GreyBoxDrift:
         bad = sorted(set(self.coef_) - known)
         if bad:
             raise InputError(f"{name}: greybox coefficient(s) {', '.join(bad)} unknown; known: {', '.join(sorted(known))}")
-        if self.half_range_c_ <= 0 or any(v < 0 for k, v in self.spec_.items() if k != "rate_form") or self.spec_["rate_form"] not in (0, 1, 2):
+        spec = self.spec_
+        if set(spec) != {"tau_e_s", "rate_form", "width_c", "tau_w_s", "rate_tau_s"}:
+            raise InputError(f"{name}: greybox spec_ keys {sorted(spec)}; expected tau_e_s, rate_form, width_c, tau_w_s, rate_tau_s")
+        if (self.half_range_c_ <= 0 or any(v < 0 for v in spec.values()) or spec["rate_form"] not in (0, 1, 2)
+                or (spec["rate_form"] and not spec["rate_tau_s"] > 0)):
             raise InputError(f"{name}: greybox spec {self.spec_} out of range")
 
 
@@ -399,8 +411,8 @@ class GreyBoxStream:
         if self.power_on_s is None and time_s.size:
             self.power_on_s = float(time_s[0])
         m = self.model
-        spec = _Spec(m.spec_["tau_e_s"], m.spec_["rate_form"], m.spec_["width_c"], m.spec_["tau_w_s"])
-        raw = _kernel(time_s, temperature_c, self.state, spec, m.rate_tau_s)
+        spec = _Spec(m.spec_["tau_e_s"], m.spec_["rate_form"], m.spec_["width_c"], m.spec_["tau_w_s"], m.spec_["rate_tau_s"])
+        raw = _kernel(time_s, temperature_c, self.state, spec)
         if self.clamp:  # the cubic is held at the edge of its range, as firmware holds TMIN..TMAX; dT/dt is linear and extrapolates
             np.clip(raw[:, 0], *m.temperature_range_c_, out=raw[:, 0])
         columns = _columns(raw, time_s, spec, self.power_on_s, m.centre_c_, m.half_range_c_, m.degree)
@@ -410,11 +422,12 @@ class GreyBoxStream:
         return out
 
 
-def _kernel(time_s, temperature_c, state, spec: _Spec, rate_tau_s) -> np.ndarray:
+def _kernel(time_s, temperature_c, state, spec: _Spec) -> np.ndarray:
+    """(T_e, dT/dt, play) of each sample; without a dT/dt term the filter runs at 1 s and its output is unused."""
     from gyrocomp.effects._stateful import advance
 
     out = np.empty((time_s.size, 3))
-    advance(time_s, temperature_c, state, float(spec.tau_e), float(rate_tau_s), 0.5 * float(spec.width), out)
+    advance(time_s, temperature_c, state, float(spec.tau_e), float(spec.tau_r or 1.0), 0.5 * float(spec.width), out)
     return out
 
 
@@ -457,7 +470,7 @@ class _Prepared:
         per_block = max(1, int(round(block_s / interval)))
         group = max(1, per_block // 10)  # ten group means a block: the shapes are slow beside that
         pb = per_block // group  # group means a block
-        settle_s = SETTLE_TAUS * model.rate_tau_s
+        settle_s = SETTLE_TAUS * model.rate_tau_s[1]
         run_start = t[run.segments[0].indices(t.size)[0]]
         times, temps, rates, blocks, starts, segs = [], [], [], [], [], []
         n_blocks = offset = 0
@@ -483,7 +496,7 @@ class _Prepared:
         return cls(run, np.concatenate(times), np.concatenate(temps), segs, block_of, n_blocks, per_block * interval,
                    np.asarray(starts), _block_means(y_all, block_of, n_blocks), duration)
 
-    def raw(self, spec: _Spec, rate_tau_s: float, bridge: bool) -> np.ndarray:
+    def raw(self, spec: _Spec, bridge: bool) -> np.ndarray:
         from gyrocomp.effects._stateful import new_state
 
         state = new_state()
@@ -491,7 +504,7 @@ class _Prepared:
         for s in self.segments:
             if not bridge:
                 state[:] = 0.0
-            out[s] = _kernel(self.time_s[s], self.temperature_c[s], state, spec, rate_tau_s)
+            out[s] = _kernel(self.time_s[s], self.temperature_c[s], state, spec)
         return out
 
     def power_on_column(self, width: float) -> np.ndarray:
@@ -501,7 +514,7 @@ class _Prepared:
         return (np.arange(self.temperature_c.size) < first).astype(float)
 
     def ranges(self, model: GreyBoxDrift, spec: _Spec) -> tuple:
-        raw = self.raw(spec, model.rate_tau_s, model.bridge_gaps)
+        raw = self.raw(spec, model.bridge_gaps)
         return float(raw[:, 0].min()), float(raw[:, 0].max()), float(raw[:, 1].min()), float(raw[:, 1].max())
 
 
@@ -618,20 +631,19 @@ class _Search:
         return next((r for r in refused if r.term in added), None)
 
     def _raw_of(self, i: int, spec: _Spec) -> np.ndarray:
-        key = (i, spec.tau_e, spec.width)
+        key = (i, spec.tau_e, spec.width, spec.tau_r)
         if key not in self._raw:
-            m = self.model
-            self._raw[key] = self.runs[i].raw(_Spec(spec.tau_e, 1, spec.width, 0.0), m.rate_tau_s, m.bridge_gaps)
+            self._raw[key] = self.runs[i].raw(_Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r), self.model.bridge_gaps)
         return self._raw[key]
 
     # search -------------------------------------------------------------------
     def grids(self) -> dict:
         m = self.model
         return {
-            "thermal_lag": [("tau_e", float(v)) for v in np.geomspace(*m.lag_tau_s, m.grid_points)],
-            "temp_rate": [("rate_form", 1), ("rate_form", 2)],
-            "hysteresis": [("width", float(v)) for v in m.widths_c],
-            "warmup": [("tau_w", float(v)) for v in np.geomspace(*m.warmup_tau_s, m.grid_points)],
+            "thermal_lag": [{"tau_e": float(v)} for v in np.geomspace(*m.lag_tau_s, m.grid_points)],
+            "temp_rate": [{"rate_form": form, "tau_r": float(v)} for form in (1, 2) for v in np.geomspace(*m.rate_tau_s, RATE_GRID_POINTS)],
+            "hysteresis": [{"width": float(v)} for v in m.widths_c],
+            "warmup": [{"tau_w": float(v)} for v in np.geomspace(*m.warmup_tau_s, m.grid_points)],
         }
 
     def run(self) -> tuple[_Spec, list, list]:
@@ -650,7 +662,7 @@ class _Search:
         for term in m.terms:  # judged against the baseline: a term no parameter of its grid separates from it
             if term in not_fitted:
                 continue
-            refusals = [self.identified(spec, dataclasses.replace(spec, **{k: v}), term) for k, v in grids[term]]
+            refusals = [self.identified(spec, dataclasses.replace(spec, **change), term) for change in grids[term]]
             if all(r is not None for r in refusals):
                 not_fitted[term] = max(refusals, key=lambda r: r.unique).reason  # the nearest miss (the narrowest play)
         remaining = [t for t in m.terms if t not in not_fitted]
@@ -658,10 +670,10 @@ class _Search:
         while remaining:
             best = None
             for term in remaining:
-                for key, value in grids[term]:
-                    if term == "temp_rate" and value <= spec.rate_form:
+                for change in grids[term]:
+                    if term == "temp_rate" and change["rate_form"] <= spec.rate_form:
                         continue  # a selected sensitivity may still split into heating and cooling
-                    trial = dataclasses.replace(spec, **{key: value})
+                    trial = dataclasses.replace(spec, **change)
                     if self.identified(spec, trial, term) is not None:
                         continue  # not separable, at this parameter, from what the model holds
                     t_blocks, _, t_names = self.design(trial)
@@ -695,16 +707,21 @@ class _Search:
         """Each selected nonlinear parameter off its grid: two rounds of a bounded search of the deviance in its logarithm.
 
         The bounds are the grid's neighbours of the value (a factor of the
-        grid's spacing either way), so the search settles the value the
-        grid bracketed and never wanders to another minimum. A parameter
+        grid's spacing either way, within the configured range), so the
+        search settles the value the grid bracketed and never wanders to
+        another minimum. A parameter
         at which the runs no longer identify its term is not taken.
         """
         spacing = {
             "tau_e": (self.model.lag_tau_s[1] / self.model.lag_tau_s[0]) ** (1 / (self.model.grid_points - 1)),
             "tau_w": (self.model.warmup_tau_s[1] / self.model.warmup_tau_s[0]) ** (1 / (self.model.grid_points - 1)),
             "width": max(b / a for a, b in zip(sorted(self.model.widths_c), sorted(self.model.widths_c)[1:])) if len(self.model.widths_c) > 1 else 2.0,
+            "tau_r": (self.model.rate_tau_s[1] / self.model.rate_tau_s[0]) ** (1 / (RATE_GRID_POINTS - 1)),
         }
-        terms = {"tau_e": "thermal_lag", "tau_w": "warmup", "width": "hysteresis"}
+        terms = {"tau_e": "thermal_lag", "tau_w": "warmup", "width": "hysteresis", "tau_r": "temp_rate"}
+        m = self.model
+        ranges = {"tau_e": m.lag_tau_s, "tau_w": m.warmup_tau_s, "width": (min(m.widths_c), max(m.widths_c)), "tau_r": m.rate_tau_s}
+        without = {"tau_e": {"tau_e": 0.0}, "tau_w": {"tau_w": 0.0}, "width": {"width": 0.0}, "tau_r": {"rate_form": 0, "tau_r": 0.0}}
         for _ in range(2):
             for key, factor in spacing.items():
                 value = getattr(spec, key)
@@ -715,10 +732,13 @@ class _Search:
                     trial = dataclasses.replace(spec, **{key: float(np.exp(log_value))})
                     return self.deviance(self.design(trial)[0], noise)[0]
 
-                result = optimize.minimize_scalar(deviance, bounds=(math.log(value / factor), math.log(value * factor)), method="bounded",
-                                                  options={"xatol": 1e-3})
+                lo, hi = ranges[key]
+                bounds = (math.log(max(value / factor, lo)), math.log(min(value * factor, hi)))
+                if bounds[1] - bounds[0] < 1e-9:
+                    continue
+                result = optimize.minimize_scalar(deviance, bounds=bounds, method="bounded", options={"xatol": 1e-3})
                 trial = dataclasses.replace(spec, **{key: float(np.exp(result.x))})
-                base = dataclasses.replace(spec, **{key: 0.0})
+                base = dataclasses.replace(spec, **without[key])
                 if result.fun < deviance(math.log(value)) and self.identified(base, trial, terms[key]) is None:
                     spec = trial
         return spec
@@ -732,7 +752,7 @@ class _Search:
 def _params(spec: _Spec, term: str) -> dict:
     return {
         "thermal_lag": {"tau_s": spec.tau_e},
-        "temp_rate": {"heating_cooling_apart": spec.rate_form == 2},
+        "temp_rate": {"heating_cooling_apart": spec.rate_form == 2, "filter_tau_s": spec.tau_r},
         "hysteresis": {"width_c": spec.width},
         "warmup": {"tau_s": spec.tau_w},
     }[term]

@@ -84,7 +84,7 @@ def train_greybox(runs: list, config: dict, *, source: str, seed: int | None = 0
             "starts_at_power_on": power_on,
             "formula": (
                 "drift = offset + sum_k c_k z^k + g dT/dt + a |dT/dt| + h play_w(T) + A exp(-t_on / tau_w), "
-                "z = (T_e - centre) / half_range, tau_e dT_e/dt = T - T_e, dT/dt = (T - T_f) / rate_tau_s (causal), "
+                "z = (T_e - centre) / half_range, tau_e dT_e/dt = T - T_e, dT/dt = (T - T_f) / tau_r (causal, tau_r fitted), "
                 "states carried sample by sample (gyrocomp.effects._stateful)"
             ),
             "greybox": estimator.to_dict(),
