@@ -244,15 +244,64 @@ def tvac():
     return out
 
 
+def speed(workdir=None):
+    """Whole-process causal compensation of 2 h at 1 kHz, greybox against the cubic (same run), and training on 14 h at 1 Hz.
+
+    Each command is timed three times after one warm-up and the median of
+    wall and CPU time kept; memory is the peak resident set of the process
+    (``ru_maxrss`` of the child), so a ratio of 1 means the state costs
+    nothing beyond what the cubic's pipeline holds.
+    """
+    import resource
+    import tempfile
+
+    import pandas as pd
+
+    work = Path(workdir or tempfile.mkdtemp(prefix="greybox-speed-"))
+    exe = str(Path(sys.executable).with_name("gyrocomp"))
+    t = np.arange(0, 2 * 3600.0, 1e-3)
+    T = _chamber(t[::1000], [0, 1200, 3600, 4800, 7200], [20, 20, 45, 45, 30])
+    T = np.interp(t, t[::1000], T)
+    rng = np.random.default_rng(0)
+    y = 0.05 + 2e-3 * (T - 25) + 0.01 * rng.normal(size=t.size)
+    pd.DataFrame({"time": t, "rate": y, "temperature": T}).to_parquet(work / "long.parquet")
+    t14 = np.arange(0, 14 * 3600.0)
+    T14 = _chamber(t14, [0, 3600, 18000, 25200, 43200, 50400], [20, 20, 60, 60, -10, -10])
+    y14, _ = _gyro(t14, T14, 3)
+    pd.DataFrame({"time": t14, "rate": y14, "temperature": T14}).to_parquet(work / "day.parquet")
+
+    def timed(args):
+        runs = []
+        for _ in range(4):
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            start = time.perf_counter()
+            subprocess.run([exe, "-q", *args], check=True, capture_output=True)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            runs.append((time.perf_counter() - start, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime))
+        runs = runs[1:]
+        return {"wall_s": float(np.median([r[0] for r in runs])), "cpu_s": float(np.median([r[1] for r in runs]))}
+
+    out = {"load_1min_before": os.getloadavg()[0]}
+    for config in ("firmware", "greybox"):
+        subprocess.run([exe, "-q", "train", str(work / "long.parquet"), "--config", config, "--out", str(work / f"{config}.json")], check=True)
+        out[f"compensate_{config}"] = timed(["compensate", str(work / "long.parquet"), str(work / f"{config}.json"), "--out", str(work / "c.parquet")])
+    out["compensate_greybox_over_cubic_wall"] = out["compensate_greybox"]["wall_s"] / out["compensate_firmware"]["wall_s"]
+    out["compensate_greybox_over_cubic_cpu"] = out["compensate_greybox"]["cpu_s"] / out["compensate_firmware"]["cpu_s"]
+    out["train_greybox_14h_1hz"] = timed(["train", str(work / "day.parquet"), "--config", "greybox", "--out", str(work / "day.json")])
+    out["peak_rss_mb_children"] = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    out["load_1min_after"] = os.getloadavg()[0]
+    return out
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--part", default="all", choices=["sample", "independent", "strong", "heating_cooling", "tvac", "all"])
+    parser.add_argument("--part", default="all", choices=["sample", "independent", "strong", "heating_cooling", "tvac", "speed", "all"])
     parser.add_argument("--seeds", type=int, nargs="+", default=list(CHECK_SEEDS))
     args = parser.parse_args(argv)
     sys.path.insert(0, str(ROOT))
     path = HERE / "results" / "greybox.json"
     results = json.loads(path.read_text()) if path.is_file() else {}
-    parts = ["sample", "independent", "strong", "heating_cooling", "tvac"] if args.part == "all" else [args.part]
+    parts = ["sample", "independent", "strong", "heating_cooling", "tvac", "speed"] if args.part == "all" else [args.part]
     for part in parts:
         if part in ("independent", "strong"):
             results[part] = independent(args.seeds, None if part == "independent" else STRONG_Z)
