@@ -72,6 +72,7 @@ def allan(
 
 
 def _table(series):
+    from rich.markup import escape
     from rich.table import Table
 
     table = Table(title="IEEE Std 952 noise terms (fit +- 1 sigma; read-off)")
@@ -81,7 +82,7 @@ def _table(series):
         for key, term in s.terms.items():
             readoff = term.get("readoff")
             table.add_row(
-                s.name if s.column == "rate" else f"{s.name} [{s.column}]",
+                escape(s.name if s.column == "rate" else f"{s.name} [{s.column}]"),  # a name is text, never console markup
                 key,
                 f"{term['value']:.4g} +- {term['sigma']:.2g}",
                 term["unit"],

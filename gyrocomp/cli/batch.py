@@ -111,6 +111,7 @@ def _command_options(command: str, tokens: list[str]) -> dict:
 
 
 def _table(result, n_figures: int = 3):
+    from rich.markup import escape
     from rich.table import Table
 
     table = Table(title=f"gyrocomp batch {result.command} (every figure: summary.csv)")
@@ -121,7 +122,7 @@ def _table(result, n_figures: int = 3):
     for head in figures:
         table.add_column(head.replace("_", " "), justify="right")
     for row in result.rows:
-        table.add_row(row["input"], row["status"], row["error"] or row["threshold"], *[_cell(row[c]) for c in figures])
+        table.add_row(escape(row["input"]), row["status"], escape(str(row["error"] or row["threshold"] or "")), *[_cell(row[c]) for c in figures])
     return table
 
 

@@ -76,7 +76,9 @@ def diagnose(
         for axis, verdict in report.get("axes", {report.get("axis"): report}).items():
             table = summary_table(verdict)
             if "axes" in report:
-                table.title = f"[{axis}] {table.title}"
+                from rich.markup import escape
+
+                table.title = f"{escape(f'[{axis}]')} {table.title}"  # the axis name is text, never console markup
             console.print(table)
             if "model_out" in verdict:
                 m = verdict["model_out"]

@@ -64,16 +64,17 @@ def run(
 
 
 def _print(console, report: dict, out: Path) -> None:
+    from rich.markup import escape
     from rich.table import Table
 
-    table = Table(title=f"{out}/report.md (test run {report['test']['name']})")
+    table = Table(title=escape(f"{out}/report.md (test run {report['test']['name']})"))
     several = len(report.get("axes", ())) > 1
     for column in ("method", "mode", "ARW deg/sqrt(h)", "bias inst. deg/h", "drift std deg/h", "drift p-p deg/h", "signal kept", "train s"):
         table.add_column(column)
     for row in report["rows"]:
         kept = row.get("signal")
         table.add_row(
-            f"{row['method']} [{row['axis']}]" if several else row["method"],
+            escape(f"{row['method']} [{row['axis']}]" if several else row["method"]),  # a name is text, never console markup
             row["mode"] or "-",
             f"{row['arw']['value']:.3g}",
             f"{row['bias_instability']['value']:.3g}",

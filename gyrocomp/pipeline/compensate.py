@@ -95,6 +95,17 @@ class DriftModel:
         r = self.obj["training"]["temperature_rate_c_per_s"]
         return float(r["min"]), float(r["max"])
 
+    @property
+    def causal_rate_range_c_per_s(self) -> tuple[float, float]:
+        """dT/dt range of the training run by the causal estimator (older models: the centred one's)."""
+        r = self.obj["training"].get("temperature_rate_causal_c_per_s") or self.obj["training"]["temperature_rate_c_per_s"]
+        return float(r["min"]), float(r["max"])
+
+    @property
+    def uses_rate(self) -> bool:
+        """Whether any segment's learner depends on dT/dt (a polynomial without its rate term does not)."""
+        return any(not (learner.kind == "polynomial" and not learner.rate_term) for learner, *_ in self.learners.values())
+
     def inputs(self, temperature_c, fs_hz: float, *, causal: bool, bounds=None) -> np.ndarray:
         """[temperature, temperature rate] with the model's estimator (centred or causal), within each gap-free range of `bounds`."""
         return segment_inputs(temperature_c, fs_hz, self.rate, bounds, causal=causal)
@@ -172,7 +183,7 @@ class CausalCompensation:
             self._seen = _Seen(model, ("temperature",))
         else:
             self._rate = CausalRate(model.rate, fs_hz)
-            self._seen = _Seen(model)
+            self._seen = _Seen(model, causal=True)
 
     def __call__(self, rate, temperature, time_s=None) -> tuple[np.ndarray, np.ndarray]:
         """``drift_model`` and ``compensated`` [deg/s] of the chunk (a grey-box model needs its `time_s`)."""
@@ -392,7 +403,7 @@ def _compensate_static(recording, model: DriftModel, mode, clamp, seed, workers,
     predicted = model.predict(X, clamp=clamp)
     drift_model = np.sum(list(predicted.values()), axis=0)
     summary = {"mode": mode, "kind": model.kind, "parallel": model.parallel, "clamp": bool(clamp)}
-    summary["ranges"], summary["warnings"] = _ranges(recording.name, _Seen(model).add(X), model, clamp)
+    summary["ranges"], summary["warnings"] = _ranges(recording.name, _Seen(model, causal=mode == "causal").add(X), model, clamp)
     if mode == "full" and model.parallel:
         if seed is None:
             seed = model.obj.get("settings", {}).get("decompose_seed")
@@ -428,9 +439,12 @@ def _parallel_segments(recording, model: DriftModel, seed, workers, callback, bo
 class _Seen:
     """Running minimum, maximum and count outside the training range of each input [T, dT/dt]."""
 
-    def __init__(self, model: DriftModel, inputs=("temperature", "dT/dt")):
+    def __init__(self, model: DriftModel, inputs=("temperature", "dT/dt"), *, causal: bool = False):
+        """`causal`: dT/dt is judged against the training run's range by the causal estimator, the one compensating now."""
         self.inputs = inputs
-        self.ranges = (model.temperature_range_c, *((model.rate_range_c_per_s,) if len(inputs) > 1 else ()))
+        rates = () if len(inputs) < 2 else (model.causal_rate_range_c_per_s if causal else model.rate_range_c_per_s,)
+        self.ranges = (model.temperature_range_c, *rates)
+        self.warn_rate = len(inputs) > 1 and model.uses_rate
         self.rows = 0
         self.low, self.high = [math.inf] * len(inputs), [-math.inf] * len(inputs)
         self.outside = [0] * len(inputs)
@@ -459,8 +473,8 @@ def _ranges(name: str, seen: _Seen, model: DriftModel, clamp: bool) -> tuple[dic
         outside = seen.outside[column] / seen.rows
         ranges[key] = {"min": x_lo, "max": x_hi, "training_min": lo, "training_max": hi,
                        "below_by": below, "above_by": above, "share_outside": outside}
-        if below == 0 and above == 0:
-            continue
+        if (below == 0 and above == 0) or (column == 1 and not seen.warn_rate):
+            continue  # a model with no dT/dt term does not extrapolate in dT/dt
         by = " and ".join(
             text for text in (f"{below:.3g} {unit} below" if below > 0 else "", f"{above:.3g} {unit} above" if above > 0 else "") if text
         )

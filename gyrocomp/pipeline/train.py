@@ -548,6 +548,7 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
         "training": {
             "temperature_c": {"min": float(lo[0]), "max": float(hi[0])},
             "temperature_rate_c_per_s": {"min": float(lo[1]), "max": float(hi[1])},
+            "temperature_rate_causal_c_per_s": dict(zip(("min", "max"), _causal_rate_range(temperature, fs_hz, rate_cfg, bounds))),
             "n_samples": n,
             "duration_s": float(n / fs_hz),
             "n_segments": 1 if bounds is None else len(bounds),
@@ -558,6 +559,12 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
     if extra.get("segment_classes") is not None:
         body["training"]["segment_classes"] = extra["segment_classes"]
     return {**header, **body}
+
+
+def _causal_rate_range(temperature, fs_hz: float, rate_cfg, bounds) -> tuple[float, float]:
+    """dT/dt range of the training run by the causal estimator, the one ``compensate --mode causal`` judges a recording's against."""
+    rate = segment_inputs(temperature, fs_hz, rate_cfg, bounds, causal=True)[:, 1]
+    return float(rate.min()), float(rate.max())
 
 
 def _identifiable(spec, X: np.ndarray, min_unique: float, seed) -> tuple:
