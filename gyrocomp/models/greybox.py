@@ -128,7 +128,7 @@ class GreyBoxDrift:
         Powers of the element temperature.
     reference_temperature : float, default=25.0
         T_ref [degC] of the reported polynomial (``coef_about_reference_``).
-    rate_tau_s : tuple of float, default=(2.0, 60.0)
+    rate_tau_s : tuple of float, default=(10.0, 60.0)
         (low, high) of the time constant of the causal dT/dt filter [s],
         fitted with the dT/dt term (a log grid, then refined).
     terms : tuple of str
@@ -182,7 +182,7 @@ class GreyBoxDrift:
         self,
         degree=3,
         reference_temperature=25.0,
-        rate_tau_s=(2.0, 60.0),
+        rate_tau_s=(10.0, 60.0),
         terms=TERMS,
         lag_tau_s=(10.0, 14400.0),
         warmup_tau_s=(60.0, 14400.0),
