@@ -28,6 +28,7 @@ NAMES = {
     "bp": "BP (MLP)",
     "elm": "ELM",
     "polynomial": "cubic polynomial + dT/dt",
+    "greybox": "grey-box (lag, dT/dt, hysteresis, warm-up)",
 }
 """README names of the methods of configs/compare.toml."""
 

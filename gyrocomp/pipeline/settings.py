@@ -331,7 +331,7 @@ class RunSettings:
         report lists them.
     """
 
-    methods: tuple = ("pe-lcd-anfis", "iceemdan-se-tfpf-nsga2elm", "bp", "elm", "polynomial")
+    methods: tuple = ("pe-lcd-anfis", "iceemdan-se-tfpf-nsga2elm", "bp", "elm", "polynomial", "greybox")
     modes: tuple = ("full", "causal")
     overrides: tuple = ()
 
