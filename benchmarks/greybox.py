@@ -23,7 +23,7 @@ deviation of the 100 s means of ``rate - model`` after its mean is removed
 
 Usage: ``python benchmarks/greybox.py [--part sample|independent|strong|heating_cooling|tvac|all] [--seeds 3001 3002]``
 (``strong``: the independent pairs with effects of visibility 200 to 400);
-writes ``benchmarks/results/greybox.json``.
+writes each part under ``runs`` of ``benchmarks/results/greybox.json`` with its provenance (:mod:`provenance`).
 """
 
 from __future__ import annotations
@@ -31,7 +31,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import subprocess
 import sys
 import time
@@ -299,20 +298,17 @@ def main(argv=None):
     parser.add_argument("--seeds", type=int, nargs="+", default=list(CHECK_SEEDS))
     args = parser.parse_args(argv)
     sys.path.insert(0, str(ROOT))
-    path = HERE / "results" / "greybox.json"
-    results = json.loads(path.read_text()) if path.is_file() else {}
+    from provenance import write
+
     parts = ["sample", "independent", "strong", "heating_cooling", "tvac", "speed"] if args.part == "all" else [args.part]
     for part in parts:
         if part in ("independent", "strong"):
-            results[part] = independent(args.seeds, None if part == "independent" else STRONG_Z)
+            figures = independent(args.seeds, None if part == "independent" else STRONG_Z)
         else:
-            results[part] = globals()[part]()
-        print(part, json.dumps({k: v for k, v in results[part].items() if k != "rows"} if isinstance(results[part], dict) else results[part], indent=1))
-    results["machine"] = {
-        "commit": subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip(),
-        "python": platform.python_version(), "cpu": platform.machine(), "load_1min": os.getloadavg()[0],
-    }
-    path.write_text(json.dumps(results, indent=1) + "\n")
+            figures = globals()[part]()
+        figures = figures if isinstance(figures, dict) else {"rows": figures}
+        write("greybox", figures, key=part)
+        print(part, json.dumps({k: v for k, v in figures.items() if k != "rows"}, indent=1, default=float))
 
 
 if __name__ == "__main__":
