@@ -23,8 +23,9 @@ whole process (``python -m gyrocomp ...``), peak resident memory from
     :func:`gyrocomp.allan.analyse` of the whole array in memory (relative
     difference of every deviation). The file is deleted afterwards.
 ``train``
-    Peak memory of ``train`` (polynomial, ELM) on the 1x and the 10x
-    recording, and the size of the extra input columns.
+    Peak memory of ``train`` (polynomial, ELM, and PE-LCD-ANFIS, which
+    decomposes the recording) on the 1x and the 10x recording, and the size
+    of the extra input columns.
 ``rate``
     The O(1) dT/dt against the direct FIR (``np.convolve``) on 10 min at
     1 kHz, and its rounding after 10^8 samples of a stream against the exact
@@ -252,11 +253,11 @@ def part_big() -> dict:
 
 
 def part_train() -> dict:
-    """Peak memory of ``train`` (polynomial, and ELM) on 12 min and on 2 h at 1 kHz, against the extra input columns."""
+    """Peak memory of ``train`` (polynomial, ELM, PE-LCD-ANFIS) on 12 min and on 2 h at 1 kHz, against the extra input columns."""
     short, long = oven(DATA / "oven_12min_1khz.parquet", 720.0), oven(DATA / "oven_2h_1khz.parquet", 7200.0)
     extra_mb = 3 * 8 * (7_200_000 - 720_000) / 2**20  # time, rate, temperature
     out = {"extra_input_columns_mb": extra_mb}
-    for config in ("polynomial", "elm"):
+    for config in ("polynomial", "elm", "pe-lcd-anfis"):
         runs = [timed(gyrocomp("train", f, "-c", config, "--out", DATA / f"t_{config}.json")) for f in (short, long)]
         out[config] = {
             "peak_1x_mb": runs[0][2], "peak_10x_mb": runs[1][2], "ratio_10x_1x": runs[1][2] / runs[0][2],

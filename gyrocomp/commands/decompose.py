@@ -150,7 +150,7 @@ def table(recording, result, settings, seed: int):
     import pandas as pd
 
     columns, header = _columns(recording, result, settings, seed)
-    return pd.DataFrame(columns), header
+    return pd.DataFrame(columns, copy=False), header  # the columns are views of the decomposition's rows
 
 
 def _columns(recording, result, settings, seed: int):

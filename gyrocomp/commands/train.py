@@ -229,7 +229,7 @@ def _train_axis(task: dict) -> dict:
     from gyrocomp.config import bind, settings_dict
     from gyrocomp.decompose import DecomposeSettings, decompose
     from gyrocomp.pipeline.settings import pipeline_settings
-    from gyrocomp.pipeline.train import train_direct, train_parallel, train_parallel_segments
+    from gyrocomp.pipeline.train import fit_parallel, parallel_targets, train_direct, train_parallel_segments
 
     recording, config, source, seed = task["recording"], task["config"], task["source"], task["seed"]
     if not pipeline_settings(config, source).parallel:
@@ -239,6 +239,9 @@ def _train_axis(task: dict) -> dict:
     settings = bind(DecomposeSettings, config.get("decompose"), f"{source} [decompose]")
     classify_settings = bind(ClassifySettings, config.get("classify"), f"{source} [classify]")
     result = decompose(recording.rate_dps, settings, seed=seed)
-    frame, header = table(recording, result, settings, seed)
     classes = {"settings": settings_dict(classify_settings), "components": classify(result.components, result.names, classify_settings)}
-    return train_parallel(frame, header, classes, config, source=source, seed=seed, inputs=[recording.input_record()])
+    frame, header = table(recording, result, settings, seed)
+    del result
+    prepared = parallel_targets(frame, header, classes, config, source=source)
+    del frame  # the learners are fitted without the decomposition in memory
+    return fit_parallel(prepared, config, source=source, seed=seed, inputs=[recording.input_record()])

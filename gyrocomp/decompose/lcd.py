@@ -80,17 +80,21 @@ def lcd(
         raise ValueError(f"q = {q}; must lie in (0, 1) (eq. (4))")
     x = np.asarray(x, dtype=float)
     sifting = Sifting(stop="sd", sd_threshold=sd_stop, max_sift=max_sift)
-    trend = x.copy()
-    iscs = []
-    while len(iscs) < max_components and count_extrema(trend[None])[0] >= 3:
+    out = np.empty((max_components + 1, x.size))  # filled in place: no second copy of every ISC at the end
+    trend = out[0]
+    trend[:] = x
+    k = 0
+    while k < max_components and count_extrema(trend[None])[0] >= 3:
         isc = _sift(trend[None], sifting, _baseline, energy_stop=sd_stop, q=q)[0]
-        iscs.append(isc)
-        trend = trend - isc
+        np.subtract(trend, isc, out=out[k + 1])
+        trend[:] = isc
+        k += 1
+        trend = out[k]
         if callback is not None:
-            callback(len(iscs), max_components)
+            callback(k, max_components)
     if callback is not None:
         callback(max_components, max_components)
-    return np.vstack(iscs + [trend])
+    return out[: k + 1]
 
 
 def baseline_points(t, f, q=0.5):

@@ -55,6 +55,8 @@ __all__ = [
     "INPUTS",
     "train_direct",
     "train_parallel",
+    "parallel_targets",
+    "fit_parallel",
     "train_parallel_segments",
     "segments",
     "class_sums",
@@ -152,6 +154,23 @@ def train_parallel(
     dict
         The ``model.json`` object.
     """
+    prepared = parallel_targets(components, components_header, classes, config, source=source)
+    return fit_parallel(prepared, config, source=source, seed=seed, inputs=inputs)
+
+
+def parallel_targets(components: "pd.DataFrame", components_header: dict, classes: dict, config: dict, *, source: str = "config") -> dict:
+    """The first half of :func:`train_parallel`: the class sums its learners fit, and what the model records.
+
+    The result holds no reference to `components`' component columns: a
+    caller that drops its own fits (:func:`fit_parallel`) without the
+    decomposition in memory (``train`` on a recording).
+
+    Returns
+    -------
+    dict
+        ``targets`` (segment to class sum), ``temperature``, ``fs_hz``,
+        ``settings`` and ``extra``, as :func:`fit_parallel` takes them.
+    """
     from gyrocomp.denoise import DenoiseSettings
 
     pipeline = pipeline_settings(config, source)
@@ -162,8 +181,7 @@ def train_parallel(
     temperature = _temperature_of(components, "components")
     fs_hz = _fs_of(components["time"].to_numpy(dtype=float))
     denoise = bind(DenoiseSettings, config.get("denoise"), f"{source} [denoise]")
-    stack = components[list(names)].to_numpy(dtype=float).T
-    parts = segments(stack, labels, denoise)
+    parts = segments([components[name].to_numpy(dtype=float) for name in names], labels, denoise)
     if not any(label == "drift" for label in labels):
         raise InputError(
             "classes: no component is classed drift; the drift segment (trend included) is what the model learns"
@@ -184,16 +202,21 @@ def train_parallel(
         "segments": {seg: {"components": members[seg]} for seg in targets},
         "training_classes": classes.get("components"),
     }
+    return {"targets": targets, "temperature": temperature, "fs_hz": fs_hz, "settings": settings, "extra": extra}
+
+
+def fit_parallel(prepared: dict, config: dict, *, source: str = "config", seed: int | None = 0, inputs: list[dict] | None = None) -> dict:
+    """The second half of :func:`train_parallel`: fit the learners on :func:`parallel_targets`' class sums."""
     return _fit(
-        targets,
-        temperature,
-        fs_hz,
+        prepared["targets"],
+        prepared["temperature"],
+        prepared["fs_hz"],
         config,
         source=source,
         seed=seed,
-        settings=settings,
+        settings=prepared["settings"],
         inputs=inputs or [],
-        extra=extra,
+        extra=prepared["extra"],
     )
 
 
@@ -365,12 +388,14 @@ def class_sums(
     return parts, classes
 
 
-def segments(stack: np.ndarray, labels, denoise_settings) -> dict:
+def segments(stack, labels, denoise_settings) -> dict:
     """Denoise each component as ``[denoise]`` says for its class, then sum each class.
 
     Parameters
     ----------
-    stack : ndarray, shape (n_components, n_samples)
+    stack : ndarray, shape (n_components, n_samples), or sequence of 1-D arrays
+        The components, fastest first (the columns of ``components.parquet``
+        need not be copied into one array).
     labels : sequence of {"noise", "mixed", "drift"}
         One class per component.
     denoise_settings : gyrocomp.denoise.DenoiseSettings
@@ -381,16 +406,28 @@ def segments(stack: np.ndarray, labels, denoise_settings) -> dict:
         ``noise``, ``mixed``, ``drift``: the sums of the denoised components
         of each class [deg/s] (zeros for a class without components or one
         that is dropped).
+
+    Notes
+    -----
+    One component is denoised at a time and added to its class's sum in
+    component order: the same bytes as summing the rows of
+    :func:`gyrocomp.denoise.apply`'s output over the first axis, in memory
+    for one processed component instead of all of them.
     """
     from gyrocomp import denoise
 
     labels = list(labels)
-    processed = denoise.apply(stack, labels, denoise_settings)
-    out = {}
-    for cls in ("noise", "mixed", "drift"):
-        rows = [i for i, label in enumerate(labels) if label == cls]
-        out[cls] = processed[rows].sum(axis=0) if rows else np.zeros(stack.shape[1])
-    return out
+    if len(labels) != len(stack):
+        raise InputError(f"denoise: {len(labels)} classes for {len(stack)} components")
+    n = len(stack[0]) if len(stack) else 0
+    sums = {}
+    for component, label in zip(stack, labels):
+        processed = denoise.apply(np.asarray(component, dtype=float)[None], [label], denoise_settings)[0]
+        if label in sums:
+            sums[label] += processed
+        else:
+            sums[label] = processed
+    return {cls: sums[cls] if cls in sums else np.zeros(n) for cls in ("noise", "mixed", "drift")}
 
 
 def segment_inputs(temperature, fs_hz: float, settings, bounds=None, *, causal: bool = False) -> np.ndarray:

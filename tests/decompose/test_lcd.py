@@ -48,3 +48,22 @@ def test_trend_is_monotonic_or_bounded():
 def test_q_out_of_range():
     with pytest.raises(ValueError, match="q"):
         lcd(np.arange(10.0), q=1.0)
+
+
+def test_components_equal_the_isc_by_isc_definition():
+    """LCD fills its output in place (issue 38, memory): each ISC is the sifting of the trend left
+    by the ones before it, and the trend is that minus the ISC, bit for bit."""
+    from gyrocomp.decompose.emd import Sifting, _sift
+    from gyrocomp.decompose.lcd import _baseline
+
+    rng = np.random.default_rng(8)
+    x = rng.standard_normal(4000) + np.cumsum(rng.standard_normal(4000)) * 0.05
+    out = lcd(x, max_components=4)
+    trend = x.copy()
+    sifting = Sifting(stop="sd", sd_threshold=0.3, max_sift=10)
+    for k in range(out.shape[0] - 1):
+        isc = _sift(trend[None], sifting, _baseline, energy_stop=0.3, q=0.5)[0]
+        np.testing.assert_array_equal(out[k], isc)
+        trend = trend - isc
+    np.testing.assert_array_equal(out[-1], trend)
+    assert out.shape[0] == 5 and out.flags.c_contiguous

@@ -143,3 +143,26 @@ def test_pipeline_writes_the_cli_artefacts_byte_for_byte(tmp_path, oven_files):
     for name in ("components.parquet", "components.json", "classes.json"):
         assert (pipe / name).read_bytes() == (cli / name).read_bytes(), name
     assert set(paths) == {"components", "classes"}
+
+
+def test_class_sums_one_component_at_a_time_equal_the_stacked_sum():
+    """`segments` denoises one component at a time into its class's sum (issue 38, memory):
+    the bytes of summing `denoise.apply`'s rows over the first axis, whether the
+    components come as one array or as separate columns."""
+    import numpy as np
+
+    from gyrocomp import denoise
+    from gyrocomp.denoise import DenoiseSettings
+    from gyrocomp.pipeline.train import segments
+
+    rng = np.random.default_rng(11)
+    stack = rng.standard_normal((7, 3000)) * np.logspace(0, -2, 7)[:, None] + np.linspace(0, 1, 3000)
+    labels = ["noise", "mixed", "noise", "mixed", "drift", "mixed", "drift"]
+    settings = DenoiseSettings()
+    processed = denoise.apply(stack, labels, settings)
+    for given in (stack, [row.copy() for row in stack]):
+        parts = segments(given, labels, settings)
+        for cls in ("noise", "mixed", "drift"):
+            rows = [i for i, label in enumerate(labels) if label == cls]
+            np.testing.assert_array_equal(parts[cls], processed[rows].sum(axis=0))
+    assert not np.any(segments(stack[:2], ["mixed", "mixed"], settings)["drift"])
