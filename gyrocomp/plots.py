@@ -11,8 +11,9 @@ Figures
 :func:`drift_figure`
     ``train --plot`` / ``compensate --plot``: bias against temperature with
     the fitted model, heating and cooling branches coloured apart (a
-    hysteresis loop shows as two branches); beside it raw and compensated
-    rate against time with the temperature on a second axis.
+    hysteresis loop shows as two branches), before and after compensation;
+    beside it raw and compensated rate against time with the temperature on
+    a second axis.
 :func:`components_figure`
     ``decompose --plot``: the components stacked, labelled with their class
     once ``classify`` has run.
@@ -76,7 +77,7 @@ def _block_means(x: np.ndarray, block: int) -> np.ndarray:
 
 
 def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""):
-    """Bias against temperature with the model, and raw / compensated rate against time, one row per axis.
+    """Bias against temperature before and after compensation, and rate against time, one row per axis.
 
     Parameters
     ----------
@@ -94,10 +95,17 @@ def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""
     -----
     A block is *heating* or *cooling* when its mean dT/dt exceeds a tenth
     of the run's largest |dT/dt| in that direction, a *soak* otherwise.
+    The left panel is the loop before compensation, with the model's
+    static curve; with ``compensated_dps`` the middle panel is the same
+    loop after it, on the same bias scale, each branch labelled with the
+    standard deviation of its block means: a thermal lag or a hysteresis
+    that the model leaves shows as heating and cooling apart.
     """
-    fig = _figure(13.0, 4.2 * len(axes))
-    grid = fig.subplots(len(axes), 2, squeeze=False, width_ratios=[1.0, 1.6])
-    for (left, right), ax in zip(grid, axes):
+    after = any(ax.get("compensated_dps") is not None for ax in axes)
+    fig = _figure(17.0 if after else 13.0, 4.2 * len(axes))
+    ratios = [1.0, 1.0, 1.6] if after else [1.0, 1.6]
+    grid = fig.subplots(len(axes), len(ratios), squeeze=False, width_ratios=ratios)
+    for row, ax in zip(grid, axes):
         time = np.asarray(ax["time_s"], dtype=float)
         fs = 1.0 / float(np.median(np.diff(time))) if len(time) > 1 else 1.0
         block = max(1, int(round(block_s * fs)))
@@ -106,18 +114,25 @@ def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""
         slope = _block_means(ax["temperature_rate_c_per_s"], block)
         threshold = 0.1 * max(float(np.max(np.abs(slope))), 1e-12)
         branch = np.where(slope > threshold, "heating", np.where(slope < -threshold, "cooling", "soak"))
-        for name in ("soak", "heating", "cooling"):
-            mask = branch == name
-            if mask.any():
-                left.plot(t_mean[mask], r_mean[mask], ".", color=_BRANCH_COLOURS[name], markersize=3, label=f"{name} ({block_s:g} s means)")
-        left.plot(ax["model_temperature_c"], np.asarray(ax["model_dps"]) * 3600.0, "k-", linewidth=1.8, label="model, dT/dt = 0")
-        left.set(xlabel="temperature [degC]", ylabel="bias [deg/h]", title=f"{ax['name']}: bias against temperature")
-        left.grid(True, alpha=0.3)
-        left.legend(fontsize=7, loc="best")
+        before = row[0]
+        _loop(before, t_mean, r_mean, branch, f"({block_s:g} s means)")
+        before.plot(ax["model_temperature_c"], np.asarray(ax["model_dps"]) * 3600.0, "k-", linewidth=1.8, label="model, dT/dt = 0")
+        before.set(xlabel="temperature [degC]", ylabel="bias [deg/h]", title=f"{ax['name']}: bias against temperature")
+        before.legend(fontsize=7, loc="best")
+        c_mean = None if ax.get("compensated_dps") is None else _block_means(ax["compensated_dps"], block) * 3600.0
+        if after:
+            loop = row[1]
+            loop.sharey(before)
+            if c_mean is not None:
+                _loop(loop, t_mean, c_mean, branch, "std {std:.3g} deg/h")
+                loop.axhline(0.0, color="k", linewidth=0.8)
+                loop.legend(fontsize=7, loc="best")
+            loop.set(xlabel="temperature [degC]", ylabel="residual bias [deg/h]", title=f"{ax['name']}: after compensation")
+        right = row[-1]
         hours = _block_means(time - time[0], block) / 3600.0
         right.plot(hours, r_mean, color="0.45", linewidth=1.0, label="raw")
-        if ax.get("compensated_dps") is not None:
-            right.plot(hours, _block_means(ax["compensated_dps"], block) * 3600.0, color="tab:green", linewidth=1.0, label="compensated")
+        if c_mean is not None:
+            right.plot(hours, c_mean, color="tab:green", linewidth=1.0, label="compensated")
         right.set(xlabel="time [h]", ylabel=f"rate, {block_s:g} s means [deg/h]", title=f"{ax['name']}: rate against time")
         right.grid(True, alpha=0.3)
         twin = right.twinx()
@@ -128,6 +143,16 @@ def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""
     if title:
         fig.suptitle(title, fontsize=10)
     return fig
+
+
+def _loop(ax, temperature, bias, branch, note: str) -> None:
+    """Block means of bias against temperature, one colour per branch; ``note`` may name ``{std}``, the branch's std [deg/h]."""
+    for name in ("soak", "heating", "cooling"):
+        mask = branch == name
+        if mask.any():
+            label = f"{name} " + note.format(std=float(np.std(bias[mask])))
+            ax.plot(temperature[mask], bias[mask], ".", color=_BRANCH_COLOURS[name], markersize=3, label=label)
+    ax.grid(True, alpha=0.3)
 
 
 def components_figure(time_s, components: Sequence[tuple], *, title: str = ""):

@@ -52,18 +52,53 @@ def test_drift_figure_content(sample):
     frame, _ = compensate(test, model, "causal")
     columns = [frame[c].to_numpy() for c in ("time", "temperature", "rate", "compensated")]
     fig = plots.drift_figure([plots.drift_axis("gx", *columns, model), plots.drift_axis("gy", *columns, model)])
-    left, right = fig.axes[0], fig.axes[1]
+    left, right = fig.axes[0], fig.axes[2]
     labels = [line.get_label() for line in left.get_lines()]
     assert any(label.startswith("heating") for label in labels) and any(label.startswith("cooling") for label in labels)
     assert "model, dT/dt = 0" in labels
     assert {line.get_label() for line in right.get_lines()} == {"raw", "compensated"}
     assert any(ax.get_ylabel() == "temperature [degC]" for ax in fig.axes)  # the second axis
-    assert len(fig.axes) == 6  # two axes, three panels each (bias, rate, its temperature twin)
+    assert len(fig.axes) == 8  # two axes, four panels each (bias before, bias after, rate, its temperature twin)
     # the test run cools first: its cooling branch lies below its heating branch at the same temperature
     heating = next(line for line in left.get_lines() if line.get_label().startswith("heating"))
     cooling = next(line for line in left.get_lines() if line.get_label().startswith("cooling"))
     at = lambda line: np.interp(0.0, *sorted_xy(line))  # noqa: E731
     assert at(cooling) < at(heating)
+
+
+def test_drift_figure_shows_the_loop_before_and_after_compensation(sample):
+    """The middle panel is the heating/cooling loop of the compensated run: a cubic leaves the loop open, the grey-box model closes it."""
+    from gyrocomp import recordings
+    from gyrocomp.config import load_config
+    from gyrocomp.pipeline.compensate import compensate, load_model
+    from gyrocomp.pipeline.greybox import load_greybox, train_greybox
+    from gyrocomp.pipeline.train import train_direct
+
+    test = recordings.read_recording(sample / "oven_test.parquet", require_temperature=True).axis()
+    train = recordings.read_recording(sample / "oven_train.parquet", require_temperature=True).axis()
+    cubic = load_model(train_direct(train, load_config("polynomial"), source="p", seed=0))
+    greybox = load_greybox(next(iter(train_greybox([train], load_config("greybox"), source="g")[0].values())), "g")
+    gaps = {}
+    for name, model in (("cubic", cubic), ("greybox", greybox)):
+        frame, _ = compensate(test, model, "causal")
+        columns = [frame[c].to_numpy() for c in ("time", "temperature", "rate", "compensated")]
+        before, after = plots.drift_figure([plots.drift_axis("gx", *columns, model)]).axes[:2]
+        assert after.get_title() == "gx: after compensation" and after.get_ylim() == before.get_ylim()
+        branch = {line.get_label().split()[0]: line for line in after.get_lines() if line.get_label()[0] != "_"}
+        assert set(branch) == {"soak", "heating", "cooling"}
+        assert all(line.get_label().endswith(" deg/h") for line in branch.values())  # each branch's std
+        compensated_means = frame["compensated"].to_numpy()[: len(frame) // 60 * 60].reshape(-1, 60).mean(axis=1) * 3600.0  # 1 Hz, 60 s blocks
+        shown = np.concatenate([line.get_ydata() for line in branch.values()])
+        np.testing.assert_allclose(np.sort(shown), np.sort(compensated_means), rtol=1e-12)
+        gap = lambda ax: np.interp(0.0, *sorted_xy(_line(ax, "heating"))) - np.interp(0.0, *sorted_xy(_line(ax, "cooling")))  # noqa: E731
+        gaps[name] = (gap(before), gap(after))
+    assert gaps["cubic"][0] == pytest.approx(gaps["greybox"][0])  # the same run before compensation: a 260 deg/h loop at 0 degC
+    assert abs(gaps["cubic"][1]) > 0.5 * abs(gaps["cubic"][0])  # the cubic leaves it open (213 deg/h)
+    assert abs(gaps["greybox"][1]) < 0.25 * abs(gaps["greybox"][0])  # the grey-box model closes it (34 deg/h)
+
+
+def _line(ax, prefix):
+    return next(line for line in ax.get_lines() if line.get_label().startswith(prefix))
 
 
 def sorted_xy(line):

@@ -36,7 +36,7 @@ def compensate(
     clamp: Annotated[Optional[bool], typer.Option("--clamp/--no-clamp", help="Clamp temperature and dT/dt to the training ranges, as firmware does (default in causal mode; in full mode the model's clip_inputs). --no-clamp extrapolates.", show_default=False)] = None,
     seed: Annotated[Optional[int], typer.Option("--seed", help="Seed of the decomposition in full mode (default: the training run's).")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Processes for the decomposition in full mode.")] = 1,
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: bias against temperature with the model (heating and cooling apart), and raw and compensated rate against time with the temperature.")] = None,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: bias against temperature, heating and cooling apart, before compensation (with the model) and after it; and raw and compensated rate against time with the temperature.")] = None,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",

@@ -39,7 +39,7 @@ def train(
     seed: Annotated[int, typer.Option("--seed", help="Seed of every learner that draws random numbers.")] = 0,
     workers: Annotated[int, typer.Option("--workers", help="Processes training the axes side by side (direct pipelines); the model does not depend on it.")] = 1,
     overrides: Annotated[Optional[List[str]], typer.Option("--set", help="Override a config value, e.g. --set model.drift.epochs=20 (repeatable).")] = None,
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: bias against temperature with the model (heating and cooling apart), and raw and compensated rate against time with the temperature.")] = None,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: bias against temperature, heating and cooling apart, before compensation (with the model) and after it; and raw and compensated rate against time with the temperature.")] = None,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
