@@ -867,7 +867,7 @@ def wanted_columns(spec: ColumnSpec, usecols: Sequence[str] | None) -> Callable[
     if usecols is None:
         return None
     patterns = (spec.time, *spec.rate_patterns, *usecols)
-    return lambda c: any(fnmatch.fnmatchcase(str(c), p) for p in patterns)
+    return lambda c: any(str(c) == p or fnmatch.fnmatchcase(str(c), p) for p in patterns)
 
 
 def keep_columns(frame: pd.DataFrame, wanted: Callable[[str], bool] | None) -> pd.DataFrame:
@@ -888,7 +888,7 @@ def keep_columns(frame: pd.DataFrame, wanted: Callable[[str], bool] | None) -> p
 
 def _has_columns(have: Sequence[str], spec: ColumnSpec) -> bool:
     needed = (spec.time, *spec.rate_patterns)
-    return all(any(fnmatch.fnmatchcase(c, p) for c in have) for p in needed)
+    return all(matching_columns(have, p) for p in needed)
 
 
 def _parse_csv(name: str, source: str | bytes, spec: ColumnSpec) -> pd.DataFrame:
@@ -1060,19 +1060,16 @@ def _parquet_arrays(parquet, names: Sequence[str]) -> dict[str, np.ndarray] | No
 
 def _select_columns(names: Sequence[str], spec: ColumnSpec, name: str, require_temperature: bool) -> dict:
     """The file columns of the axes (with their units) and temperatures; refuse missing ones."""
-    def has(pattern):
-        return [c for c in names if fnmatch.fnmatchcase(c, pattern)]
-
     missing = [] if spec.time in names else [spec.time]
     temperatures: list[str] = []
     for pattern in spec.temperature_patterns:
-        temperatures.extend(c for c in has(pattern) if c != spec.time and c not in temperatures)
+        temperatures.extend(c for c in matching_columns(names, pattern) if c != spec.time and c not in temperatures)
     if require_temperature and not temperatures:
         missing.append(spec.temperature_patterns[0])
     units = spec.rate_units * len(spec.rate_patterns) if len(spec.rate_units) == 1 else spec.rate_units
     axes: dict[str, str] = {}
     for pattern, unit in zip(spec.rate_patterns, units):
-        found = [c for c in has(pattern) if c != spec.time and c not in temperatures]
+        found = [c for c in matching_columns(names, pattern) if c != spec.time and c not in temperatures]
         if not found:
             missing.append(pattern)
         for c in found:
@@ -1437,6 +1434,17 @@ def _has_numbers(series) -> bool:
     import pandas as pd
 
     return bool(pd.to_numeric(pd.Series(series), errors="coerce").notna().any())
+
+
+def matching_columns(names: Sequence[str], pattern: str) -> list[str]:
+    """The names that `pattern` selects: the name itself when the file has it, else the names matching it as a shell glob.
+
+    An exact name comes first, so a name with brackets (``"Temperatur [°C]"``)
+    is not read as the glob character class ``[°C]`` (issue 35 item 6).
+    """
+    if pattern in names:
+        return [pattern]
+    return [c for c in names if fnmatch.fnmatchcase(c, pattern)]
 
 
 def _is_glob(pattern: str) -> bool:

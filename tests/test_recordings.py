@@ -54,6 +54,22 @@ def test_several_axes_by_list_and_glob_keep_their_names(tmp_path):
         read_recording(path, ColumnSpec(rate="w_*"))
 
 
+def test_exact_names_with_brackets_are_matched_before_globs(tmp_path):
+    """Issue 35 item 6: 'Temperatur [°C]' is a name of the file, not the glob class [°C]."""
+    t = np.arange(300) / 10.0
+    frame = pd.DataFrame(
+        {"time": t, "Gyro X [dps]": 0.1 + 0.001 * t, "Temperatur [°C]": 20.0 + 0.1 * t, "Temperatur C": np.full(300, -5.0)}
+    )
+    path = tmp_path / "bracket.csv"
+    frame.to_csv(path, index=False, encoding="utf-8")
+    spec = ColumnSpec(rate="Gyro X [dps]", temperature="Temperatur [°C]")
+    for usecols in (None, ["Temperatur [°C]"]):
+        rec = read_recording(path, spec, require_temperature=True, usecols=usecols)
+        assert rec.axis_names == ("Gyro X [dps]",)
+        np.testing.assert_allclose(rec.temperature_c, frame["Temperatur [°C]"].to_numpy(), rtol=0, atol=1e-12)
+    assert recordings.matching_columns(["Temperatur C", "Temperatur °"], "Temperatur [°C]") == ["Temperatur C", "Temperatur °"]
+
+
 def test_accelerometer_axes_have_their_own_units(tmp_path):
     frame = _three_axis()
     path = tmp_path / "imu.csv"
