@@ -71,9 +71,15 @@ def _figure(width: float, height: float):
     return Figure(figsize=(width, height), layout="constrained")
 
 
-def _block_means(x: np.ndarray, block: int) -> np.ndarray:
-    n = len(x) // block
-    return np.asarray(x[: n * block], dtype=float).reshape(n, block).mean(axis=1) if n else np.asarray(x, dtype=float)
+def _block_means(x: np.ndarray, block: int, segments: Sequence[slice] | None = None) -> np.ndarray:
+    """Means of consecutive blocks of `block` samples inside each segment: a block never spans a gap, a shorter segment is one block."""
+    x = np.asarray(x, dtype=float)
+    means = []
+    for seg in segments or (slice(0, len(x)),):
+        part = x[seg]
+        n = len(part) // block
+        means.append(part[: n * block].reshape(n, block).mean(axis=1) if n else part.mean(keepdims=True))
+    return np.concatenate(means)
 
 
 def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""):
@@ -86,10 +92,12 @@ def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""
         ``rate_dps`` (measured), ``compensated_dps`` (or None),
         ``temperature_rate_c_per_s`` (centred estimate, for the branches);
         ``model_temperature_c`` and ``model_dps``: the model's drift along
-        a temperature grid at dT/dt = 0.
+        a temperature grid at dT/dt = 0; ``segments`` (optional): the row
+        ranges sampled without a gap.
     block_s : float
         The points are means over blocks of this length [s], so that the
-        drift shows through the white noise.
+        drift shows through the white noise; blocks are counted within each
+        segment, and a segment shorter than a block is one point.
 
     Notes
     -----
@@ -109,9 +117,10 @@ def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""
         time = np.asarray(ax["time_s"], dtype=float)
         fs = 1.0 / float(np.median(np.diff(time))) if len(time) > 1 else 1.0
         block = max(1, int(round(block_s * fs)))
-        t_mean = _block_means(ax["temperature_c"], block)
-        r_mean = _block_means(ax["rate_dps"], block) * 3600.0
-        slope = _block_means(ax["temperature_rate_c_per_s"], block)
+        segments = ax.get("segments")
+        t_mean = _block_means(ax["temperature_c"], block, segments)
+        r_mean = _block_means(ax["rate_dps"], block, segments) * 3600.0
+        slope = _block_means(ax["temperature_rate_c_per_s"], block, segments)
         threshold = 0.1 * max(float(np.max(np.abs(slope))), 1e-12)
         branch = np.where(slope > threshold, "heating", np.where(slope < -threshold, "cooling", "soak"))
         before = row[0]
@@ -119,7 +128,7 @@ def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""
         before.plot(ax["model_temperature_c"], np.asarray(ax["model_dps"]) * 3600.0, "k-", linewidth=1.8, label="model, dT/dt = 0")
         before.set(xlabel="temperature [degC]", ylabel="bias [deg/h]", title=f"{ax['name']}: bias against temperature")
         before.legend(fontsize=7, loc="best")
-        c_mean = None if ax.get("compensated_dps") is None else _block_means(ax["compensated_dps"], block) * 3600.0
+        c_mean = None if ax.get("compensated_dps") is None else _block_means(ax["compensated_dps"], block, segments) * 3600.0
         if after:
             loop = row[1]
             loop.sharey(before)
@@ -129,7 +138,7 @@ def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""
                 loop.legend(fontsize=7, loc="best")
             loop.set(xlabel="temperature [degC]", ylabel="residual bias [deg/h]", title=f"{ax['name']}: after compensation")
         right = row[-1]
-        hours = _block_means(time - time[0], block) / 3600.0
+        hours = _block_means(time - time[0], block, segments) / 3600.0
         right.plot(hours, r_mean, color="0.45", linewidth=1.0, label="raw")
         if c_mean is not None:
             right.plot(hours, c_mean, color="tab:green", linewidth=1.0, label="compensated")
@@ -384,8 +393,8 @@ def model_curve(model, n: int = 200) -> tuple[np.ndarray, np.ndarray]:
     return temperature, np.sum(list(model.predict(X, clamp=True).values()), axis=0)
 
 
-def drift_axis(name: str, time_s, temperature_c, rate_dps, compensated_dps, model) -> dict:
-    """One :func:`drift_figure` axis: a run's columns and the model compensating it (its curve at dT/dt = 0, the branches by the centred dT/dt)."""
+def drift_axis(name: str, time_s, temperature_c, rate_dps, compensated_dps, model, segments: Sequence[slice] | None = None) -> dict:
+    """One :func:`drift_figure` axis: a run's columns and the model compensating it (its curve at dT/dt = 0, the branches by the centred dT/dt); `segments` the run's gap-free row ranges."""
     time = np.asarray(time_s, dtype=float)
     temperature = np.asarray(temperature_c, dtype=float)
     fs = 1.0 / float(np.median(np.diff(time))) if len(time) > 1 else 1.0
@@ -399,4 +408,5 @@ def drift_axis(name: str, time_s, temperature_c, rate_dps, compensated_dps, mode
         "temperature_rate_c_per_s": model.inputs(temperature, fs, causal=False)[:, 1],
         "model_temperature_c": grid,
         "model_dps": drift,
+        "segments": segments,
     }

@@ -162,3 +162,23 @@ def test_a_plot_there_already_is_overwritten_not_taken_for_an_input(sample, tmp_
     assert png.read_bytes()[:8] == PNG
     same = CliRunner().invoke(app, ["compensate", str(sample / "oven_test.parquet"), str(tmp_path / "a.json"), "--out", str(tmp_path / "c.parquet"), "--plot", str(sample / "oven_test.parquet")])
     assert same.exit_code == 2 and "would overwrite the input" in same.output
+
+
+def test_drift_figure_averages_within_segments():
+    """Issue 35 item 4: 25 bursts of 5 s every 5 min give 25 points per axis (blocks counted across gaps gave 2), each a burst's mean."""
+    fs, n, period = 50.0, 250, 300.0
+    time = np.concatenate([k * period + np.arange(n) / fs for k in range(25)])
+    burst = np.repeat(np.arange(25), n)
+    temperature = 20.0 - 0.4 * burst + 0.001 * np.tile(np.arange(n), 25)
+    rate = 1e-3 * burst + np.random.default_rng(0).normal(0.0, 1e-4, time.size)
+    axis = {
+        "name": "gx", "time_s": time, "temperature_c": temperature, "rate_dps": rate, "compensated_dps": None,
+        "temperature_rate_c_per_s": np.gradient(temperature, time), "model_temperature_c": np.array([10.0, 20.0]),
+        "model_dps": np.zeros(2), "segments": [slice(k * n, (k + 1) * n) for k in range(25)],
+    }
+    fig = plots.drift_figure([axis])
+    raw = next(line for line in fig.axes[-2].get_lines() if line.get_label() == "raw")
+    np.testing.assert_allclose(raw.get_ydata(), rate.reshape(25, n).mean(axis=1) * 3600.0, rtol=1e-12)
+    np.testing.assert_allclose(raw.get_xdata(), (time.reshape(25, n).mean(axis=1) - time[0]) / 3600.0, rtol=1e-12)
+    points = sum(len(line.get_xdata()) for line in fig.axes[0].get_lines() if line.get_marker() == ".")
+    assert points == 25

@@ -18,6 +18,7 @@ from gyrocomp.allan.analysis import (
     analyse,
     analyse_chunks,
     analyse_segment_chunks,
+    pool_segments,
     check_thresholds,
     get_config,
 )
@@ -31,6 +32,7 @@ __all__ = [
     "analyse",
     "analyse_chunks",
     "analyse_segment_chunks",
+    "pool_segments",
     "allan_artefact",
     "check_thresholds",
 ]

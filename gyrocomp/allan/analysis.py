@@ -31,6 +31,7 @@ __all__ = [
     "analyse",
     "analyse_chunks",
     "analyse_segment_chunks",
+    "pool_segments",
     "allan_artefact",
     "check_thresholds",
 ]
@@ -118,7 +119,12 @@ class AllanSeries:
         Averaging times [s], overlapping Allan deviation and its two-sided
         chi-square interval at `confidence` [unit of the input, deg/s for rate].
     n : ndarray of int
-        Second differences averaged at each tau (N - 2m + 1).
+        Second differences averaged at each tau (N - 2m + 1; summed over
+        the segments of a pooled series).
+    clusters : ndarray of int
+        Independent (non-overlapping) clusters of m samples at each tau,
+        floor(N/m), summed over the segments: how many samples of the
+        tau-average the deviation rests on.
     alpha : ndarray of int
         Identified power-law exponent of the rate PSD, S(f) ~ f^alpha
         (2 white PM/quantization, 0 white rate, -1 flicker, -2 random walk).
@@ -132,6 +138,8 @@ class AllanSeries:
         five-term fit, plus ``readoff`` and ``readoff_tau_s`` for ``arw``,
         ``bias_instability`` and ``rrw`` (``None`` where the curve has no such
         line).
+    segments : int
+        Gap-free segments pooled into the series (:func:`pool_segments`).
     """
 
     name: str
@@ -144,8 +152,10 @@ class AllanSeries:
     n: np.ndarray
     alpha: np.ndarray
     edf: np.ndarray
+    clusters: np.ndarray
     confidence: float
     terms: dict
+    segments: int = 1
 
     def to_dict(self) -> dict:
         """The series in the ``allan.json`` contract shape (plain JSON values)."""
@@ -161,6 +171,8 @@ class AllanSeries:
             "n": [int(v) for v in self.n],
             "alpha": [int(v) for v in self.alpha],
             "edf": self.edf.tolist(),
+            "clusters": [int(v) for v in self.clusters],
+            "segments": int(self.segments),
             "terms": self.terms,
         }
 
@@ -332,6 +344,53 @@ def _series(phase: Phase, fs_hz: float, taus, name: str, column: str, settings: 
         )
     alpha = np.array([noise_id(phase, int(k), settings.min_acf_points) for k in m], dtype=int)
     edf = np.array([edf_oadev(int(a), int(k), n_samples + 1) for a, k in zip(alpha, m)])
+    return _with_terms(name, column, fs_hz, m, avar, n, alpha, edf, n_samples // m, 1, settings)
+
+
+def pool_segments(series: Sequence[AllanSeries], *, name: str, settings: AllanConfig = AllanConfig()) -> AllanSeries:
+    """One Allan deviation of a series with gaps: the segments' variances averaged at each tau, weighted by their terms.
+
+    Parameters
+    ----------
+    series : sequence of AllanSeries
+        The gap-free segments of one axis (:func:`analyse_segment_chunks`),
+        at one sample rate.
+    name : str
+        The pooled series' name.
+    settings : AllanConfig
+
+    Returns
+    -------
+    AllanSeries
+        At every tau that some segment reaches: sigma^2 = sum_k n_k sigma_k^2 / sum_k n_k,
+        n_k the second differences of segment k (N_k - 2m + 1; a segment
+        shorter than 2m + 1 samples adds none), which is the gap-resistant
+        overlapping estimator (allantools ``gradev``) of the whole record:
+        the mean of every squared second difference that spans no gap.
+        The edf of the average of independent chi-square estimates is
+        Satterthwaite's, (sum n_k)^2 / sum(n_k^2 / edf_k); the noise type
+        at a tau is that of the segment with the most terms there. Terms
+        and read-offs are fitted to the pooled curve.
+    """
+    fs_hz = series[0].fs_hz
+    by_m: dict[int, list[tuple]] = {}
+    for s in series:
+        for m, adev, n, alpha, edf, clusters in zip(np.rint(s.tau_s * fs_hz).astype(np.int64), s.adev, s.n, s.alpha, s.edf, s.clusters):
+            by_m.setdefault(int(m), []).append((float(adev) ** 2, int(n), int(alpha), float(edf), int(clusters)))
+    m = np.array(sorted(by_m), dtype=np.int64)
+    rows = [np.array(by_m[k], dtype=float) for k in m]
+    n = np.array([r[:, 1].sum() for r in rows])
+    avar = np.array([np.dot(r[:, 0], r[:, 1]) for r in rows]) / n
+    edf = np.array([r[:, 1].sum() ** 2 / np.sum(r[:, 1] ** 2 / r[:, 3]) for r in rows])
+    alpha = np.array([r[np.argmax(r[:, 1]), 2] for r in rows], dtype=int)
+    clusters = np.array([r[:, 4].sum() for r in rows], dtype=np.int64)
+    column = series[0].column
+    return _with_terms(name, column, fs_hz, m, avar, n.astype(np.int64), alpha, edf, clusters, len(series), settings)
+
+
+def _with_terms(name, column, fs_hz, m, avar, n, alpha, edf, clusters, segments, settings: AllanConfig) -> AllanSeries:
+    """The series of an Allan variance at factors `m`: deviation, interval, fitted terms and read-offs."""
+    adev = np.sqrt(avar)
     lo, hi = chi2_interval(adev, edf, settings.confidence)
     tau = m / fs_hz
     terms = fit_terms(tau, avar, edf, settings.identify_sigmas, settings.model_error)
@@ -347,8 +406,10 @@ def _series(phase: Phase, fs_hz: float, taus, name: str, column: str, settings: 
         n=n,
         alpha=alpha,
         edf=edf,
+        clusters=np.asarray(clusters, dtype=np.int64),
         confidence=settings.confidence,
         terms=terms,
+        segments=segments,
     )
 
 

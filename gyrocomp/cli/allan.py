@@ -51,11 +51,16 @@ def allan(
     decimal: DecimalMark = ".",
     dedupe: Dedupe = None,
     resample: Resample = False,
+    segments: Annotated[
+        bool, typer.Option("--segments", help="Also write each gap-free segment's series after the one pooled over them.")
+    ] = False,
 ) -> None:
     """Allan deviation of each recording, with confidence bands and IEEE noise terms.
 
     Every axis of --rate-col (gx,gy,gz or a glob) is a series of its own,
-    named by its column; all series share one plot.
+    named by its column; all series share one plot. A recording with gaps
+    gives one series per axis: the segments' Allan variances averaged at
+    each tau, weighted by their terms (--segments adds each segment's).
 
     Writes allan.json (and the plot) first, then checks the --max-* bounds,
     which compare the classic read-offs (N at 1 s, B = minimum/0.664, K at

@@ -39,6 +39,9 @@ class Options:
         Column names and units of the recordings.
     resample : bool
         Interpolate a jittered time axis instead of refusing it.
+    segments : bool
+        Write each gap-free segment's own series (``<file> segment <k>``)
+        after the series pooled over them; the plot keeps one curve per axis.
     """
 
     column: str = "rate"
@@ -50,6 +53,7 @@ class Options:
     max_rrw: Optional[float] = None
     columns: ColumnSpec = ColumnSpec()
     resample: bool = False
+    segments: bool = False
 
     def __post_init__(self):
         for name in ("max_arw", "max_bias_instability", "max_rrw"):
@@ -76,12 +80,15 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     logs, time units other than seconds and `resample` read it whole);
     the streams of a flight log that the columns select are analysed each
     on its own time stamps (:func:`gyrocomp.recordings.read_recordings`);
-    each segment of a recording with gaps is analysed as a series of its
-    own (``<file> segment <k>``: an Allan deviation never spans a gap,
-    nothing is interpolated; a file read in chunks is not read again for
-    it, and its gaps are noted once), segments of fewer than 3 samples
-    left out; its ``column`` the axis' name, and every series written to `out` (``-``
-    is stdout) as :func:`gyrocomp.allan.allan_artefact` and drawn in one
+    each segment of a recording with gaps is analysed on its own (an Allan
+    deviation never spans a gap, nothing is interpolated; a file read in
+    chunks is not read again for it, and its gaps are noted once),
+    segments of fewer than 3 samples left out, and the segments of an axis
+    pooled into one series (:func:`gyrocomp.allan.pool_segments`; with
+    ``options.segments`` each segment's series follows it as
+    ``<file> segment <k>``); its ``column`` the axis' name, and every
+    series written to `out` (``-`` is stdout) as
+    :func:`gyrocomp.allan.allan_artefact` and the pooled ones drawn in one
     plot. The bounds are left to :func:`check`, so that the artefacts exist
     when one is crossed.
 
@@ -104,13 +111,13 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
 
     settings = al.get_config(options.config)
     column = options.column
-    series, records, units = [], [], []
+    series, curves, records = [], [], []
     for path in inputs:
         usecols = [] if column == "rate" else [column]
         if str(path) != "-" and not options.resample and streaming.supports(path, options.columns):
-            found, record, found_units = _streamed(path, options, settings, usecols)
+            found, pooled, record = _streamed(path, options, settings, usecols)
             series += found
-            units += found_units
+            curves += pooled
             records.append(record)
             continue
         streams = recordings.read_recordings(
@@ -119,38 +126,42 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         for rec in streams:  # a flight log's streams, each on its own time base
             if column != "rate" and column not in rec.columns:
                 raise InputError(f"{rec.name}: no column {column!r} to analyse; it has {', '.join(rec.columns)}")
+            label = Path(rec.name).name
             parts = rec.split()
-            for k, part in enumerate(parts, start=1):
-                label = Path(rec.name).name if len(parts) == 1 else f"{Path(rec.name).name} segment {k}"
-                if len(parts) > 1 and part.n_samples < 3:
-                    continue
-                if column == "rate":
-                    values = {axis.name: (part.axis(axis.name).rate_dps, axis.unit) for axis in part.axes}
-                else:
-                    values = {column: (part.column(column), "deg/s")}
-                for name, (x, unit) in values.items():
-                    one = al.analyse(x, rec.fs_hz, taus=options.taus, name=label, column=name, settings=settings)
-                    _relabel(one, unit)
-                    series.append(one)
-                    units.append(unit)
+            kept = [(k, part) for k, part in enumerate(parts, start=1) if len(parts) == 1 or part.n_samples >= 3]
+            axes = {axis.name: axis.unit for axis in rec.axes} if column == "rate" else {column: "deg/s"}
+            for name, unit in axes.items():
+                found = [
+                    al.analyse(
+                        part.axis(name).rate_dps if column == "rate" else part.column(column), rec.fs_hz, taus=options.taus,
+                        name=label if len(parts) == 1 else f"{label} segment {k}", column=name, settings=settings,
+                    )
+                    for k, part in kept
+                ]
+                pooled = _pool(found, label, unit, settings)
+                series += [pooled, *found] if options.segments and len(found) > 1 else [pooled]
+                curves.append((pooled, unit))
         records.append(_input_record(streams))
-        del streams, rec, parts
+        del streams, rec, parts, kept
     resolved = {**settings_dict(settings), "taus": options.taus or settings.taus, "column": column}
     artefacts.write_json(out, al.allan_artefact(series, inputs=records, settings=resolved))
     if options.plot is not None:
         from gyrocomp import plots
 
-        plots.save(plots.allan_figure(series, unit=", ".join(dict.fromkeys(units)) or "deg/s"), options.plot, dpi=120)
+        units = ", ".join(dict.fromkeys(unit for _, unit in curves)) or "deg/s"
+        plots.save(plots.allan_figure([s for s, _ in curves], unit=units), options.plot, dpi=120)
     return series
 
 
-def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, dict, list]:
+def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, list, dict]:
     """The series of a CSV or Parquet file read chunk by chunk (:func:`gyrocomp.allan.analyse_segment_chunks`).
 
-    A file with gaps is read the same way: each gap-free segment is a
-    series of its own (``<file> segment <k>``), the pieces of a chunk cut
-    at the gaps the reader finds (:attr:`gyrocomp.streaming.ChunkReader.breaks`),
-    and the reader notes the gaps once.
+    A file with gaps is read the same way: each gap-free segment is
+    analysed on its own, the pieces of a chunk cut at the gaps the reader
+    finds (:attr:`gyrocomp.streaming.ChunkReader.breaks`), the segments
+    pooled (:func:`_pool`), and the reader notes the gaps once. Returns
+    the series to write, the pooled ones with their units (to draw), and
+    the input record.
     """
     from gyrocomp import allan as al
     from gyrocomp import streaming
@@ -165,17 +176,26 @@ def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, di
         values = {column: ((lambda chunk: chunk.column(column)), "deg/s")}
     else:
         raise InputError(f"{head.name}: no column {column!r} to analyse; it has {', '.join(head.columns)}")
-    series, units = [], []
+    series, curves = [], []
+    label = Path(reader.name).name
     for name, (pick, unit) in values.items():
         found = al.analyse_segment_chunks(
-            lambda: _pieces(reader, pick), lambda: reader.fs_hz,
-            taus=options.taus, name=Path(reader.name).name, column=name, settings=settings,
+            lambda: _pieces(reader, pick), lambda: reader.fs_hz, taus=options.taus, name=label, column=name, settings=settings
         )
-        for one in found:
-            _relabel(one, unit)
-            series.append(one)
-            units.append(unit)
-    return series, reader.input_record(), units
+        pooled = _pool(found, label, unit, settings)
+        series += [pooled, *found] if options.segments and len(found) > 1 else [pooled]
+        curves.append((pooled, unit))
+    return series, curves, reader.input_record()
+
+
+def _pool(found: list, label: str, unit: str, settings):
+    """The series of one axis pooled over its segments (:func:`gyrocomp.allan.pool_segments`), every one relabelled for `unit`."""
+    from gyrocomp import allan as al
+
+    pooled = found[0] if len(found) == 1 else al.pool_segments(found, name=label, settings=settings)
+    for one in {id(s): s for s in (pooled, *found)}.values():
+        _relabel(one, unit)
+    return pooled
 
 
 def _pieces(reader, pick) -> Iterator[tuple[int, "np.ndarray"]]:

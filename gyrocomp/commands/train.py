@@ -197,7 +197,7 @@ def drift_plot(streams, models: dict, path, *, title: str = "", compensated: dic
                 values = compensate(one, model, "causal")[0]["compensated"].to_numpy()
         else:
             values = compensated[name]
-        axes.append(plots.drift_axis(name, one.time_s, one.temperature_c, one.rate_dps, values, model))
+        axes.append(plots.drift_axis(name, one.time_s, one.temperature_c, one.rate_dps, values, model, one.segments))
     plots.save(plots.drift_figure(axes, title=title), path)
 
 
