@@ -48,6 +48,7 @@ from typing import Iterator
 
 import numpy as np
 
+from gyrocomp import logparams
 from gyrocomp.errors import InputError, RecordingNote
 
 __all__ = ["read_log", "read_logs"]
@@ -64,13 +65,20 @@ _DEFAULT_RATE = {"ulog": "sensor_gyro_0_[xyz]", "dataflash": "IMU_0_Gyr?"}
 
 @dataclasses.dataclass(frozen=True)
 class _Stream:
-    """One sensor stream of a log: its name, its key (the columns' prefix), its time stamps [µs] and columns."""
+    """One sensor stream of a log: its name, its key (the columns' prefix), its time stamps [µs] and columns.
+
+    `instance` is the sensor's instance in the log (ULog ``multi_id``,
+    DataFlash ``I``), `device_id` PX4's ``device_id`` field (None in a
+    DataFlash log, whose calibrations go by instance).
+    """
 
     name: str
     key: str
     time_us: np.ndarray
     columns: dict
     units: dict
+    instance: int = 0
+    device_id: int | None = None
 
 
 def read_log(name: str, kind: str, spec) -> tuple:
@@ -96,7 +104,7 @@ def read_log(name: str, kind: str, spec) -> tuple:
     found = read_logs(name, kind, spec)
     if len(found) > 1:
         raise InputError(
-            f"{name}: the columns selected belong to {', '.join(stream for stream, _, _ in found)}, "
+            f"{name}: the columns selected belong to {', '.join(info['stream'] for info, _, _ in found)}, "
             "which are logged with their own time stamps; read one stream per run "
             "(allan, train and compensate take several, each on its own time base)"
         )
@@ -120,17 +128,22 @@ def read_logs(name: str, kind: str, spec) -> list[tuple]:
 
     Returns
     -------
-    list of (str, dict, ColumnSpec)
-        Per stream, in the log's order: its name (``sensor_gyro_0``,
-        ``IMU_1``), its columns (``time`` [µs, int64] and the stream's
-        columns) and `spec` with the axes and temperatures named one by one,
-        their units, and ``time_unit="us"``.
+    list of (dict, dict, ColumnSpec)
+        Per stream, in the log's order: what the log says about it
+        (``stream``, its name: ``sensor_gyro_0``, ``IMU_1``; ``autopilot``,
+        ``px4`` or ``ardupilot``; ``instance``; ``device_id`` for PX4), its
+        columns (``time`` [µs, int64] and the stream's columns, as the
+        sensor gave them: :mod:`gyrocomp.logparams`) and `spec` with the
+        axes and temperatures named one by one, their units, and
+        ``time_unit="us"``.
 
     Raises
     ------
     InputError
         Unreadable log, no such stream or column (the message lists them),
-        or a unit option (the format fixes the units).
+        a unit option (the format fixes the units), or log parameters that
+        say the data cannot be read as the sensor gave them
+        (:mod:`gyrocomp.logparams`).
     """
     options = (("--time-unit", spec.time_unit, None), ("--rate-unit", spec.rate_unit, "deg/s"), ("--temp-unit", spec.temperature_unit, "degC"))
     given = [option for option, value, default in options if value != default]
@@ -165,7 +178,10 @@ def read_logs(name: str, kind: str, spec) -> list[tuple]:
             temperature=",".join(temps) or "temperature",
             temperature_unit="degC",
         )
-        found.append((stream.key, {"time": stream.time_us, **stream.columns}, resolved))
+        info = {"stream": stream.key, "autopilot": "px4" if kind == "ulog" else "ardupilot", "instance": stream.instance}
+        if stream.device_id is not None:
+            info["device_id"] = stream.device_id
+        found.append((info, {"time": stream.time_us, **stream.columns}, resolved))
     return found
 
 
@@ -209,6 +225,7 @@ def _read_ulog(name: str) -> list[_Stream]:
             log = pyulog.ULog(name, list(ULOG_TOPICS))
     except Exception as err:  # pyulog raises bare exceptions on a damaged file
         raise InputError(f"{name}: not a readable ULog file ({type(err).__name__}: {err})") from None
+    logparams.px4_note(name, log.initial_parameters)
     streams = []
     for data in sorted(log.data_list, key=lambda d: (list(ULOG_TOPICS).index(d.name), d.multi_id)):
         fields = data.data
@@ -218,7 +235,8 @@ def _read_ulog(name: str) -> list[_Stream]:
         units = dict.fromkeys(columns, ULOG_TOPICS[data.name])
         if "temperature" in fields:
             columns[prefix + "temperature"] = np.asarray(fields["temperature"], dtype=float)
-        streams.append(_Stream(f"{data.name} instance {data.multi_id}", prefix[:-1], np.asarray(stamp, dtype=np.int64), columns, units))
+        device_id = int(np.median(fields["device_id"])) if "device_id" in fields and len(fields["device_id"]) else None  # as PX4's process_sensor_caldata.py
+        streams.append(_Stream(f"{data.name} instance {data.multi_id}", prefix[:-1], np.asarray(stamp, dtype=np.int64), columns, units, data.multi_id, device_id))
     return streams
 
 
@@ -227,39 +245,44 @@ def _read_dataflash(name: str) -> list[_Stream]:
     from pymavlink import DFReader
 
     with _quiet(name, "pymavlink"):
-        rows = _dataflash_rows(name, DFReader)
+        rows, params = _dataflash_rows(name, DFReader)
     fields = ["TimeUS", *DATAFLASH_FIELDS, "T"]
+    undo = logparams.ardupilot_undo(name, params)
     streams = []
     for instance in sorted(rows):
-        table = np.array(rows[instance], dtype=float)
+        table = undo(instance, np.array(rows[instance], dtype=float))
         prefix = f"IMU_{instance}_"
         columns = {prefix + f: table[:, k + 1] for k, f in enumerate(fields[1:]) if not np.isnan(table[:, k + 1]).all()}
         units = {prefix + f: u for f, u in DATAFLASH_FIELDS.items()}
         time_us = np.array([r[0] for r in rows[instance]], dtype=np.int64)
-        streams.append(_Stream(f"IMU instance {instance}", prefix[:-1], time_us, columns, units))
+        streams.append(_Stream(f"IMU instance {instance}", prefix[:-1], time_us, columns, units, instance))
     return streams
 
 
-def _dataflash_rows(name: str, DFReader) -> dict[int, list]:
-    """The IMU rows of a DataFlash log by instance: TimeUS, the DATAFLASH_FIELDS, T."""
+def _dataflash_rows(name: str, DFReader) -> tuple[dict[int, list], dict[str, list]]:
+    """The IMU rows of a DataFlash log by instance (TimeUS, the DATAFLASH_FIELDS, T), and every value of each ``PARM`` in the log's order."""
     try:
         log = DFReader.DFReader_binary(name, zero_time_base=True)
     except Exception as err:  # pymavlink raises bare exceptions on a damaged file
         raise InputError(f"{name}: not a readable DataFlash log ({type(err).__name__}: {err})") from None
     rows: dict[int, list] = {}
+    params: dict[str, list] = {}
     fields = ["TimeUS", *DATAFLASH_FIELDS, "T"]
     while True:
         try:
-            msg = log.recv_match(type=["IMU", "IMU2", "IMU3"])
+            msg = log.recv_match(type=["IMU", "IMU2", "IMU3", "PARM"])
         except Exception as err:
             raise InputError(f"{name}: damaged DataFlash log ({type(err).__name__}: {err})") from None
         if msg is None:
             break
         kind = msg.get_type()
+        if kind == "PARM":
+            params.setdefault(str(msg.Name), []).append(float(msg.Value))
+            continue
         instance = int(getattr(msg, "I", 0)) if kind == "IMU" else int(kind[-1]) - 1
         rows.setdefault(instance, []).append([getattr(msg, f, np.nan) for f in fields])
     log.close()
-    return rows
+    return rows, params
 
 
 def _require(module: str, name: str):

@@ -286,8 +286,8 @@ class Recording:
     metadata : dict, optional
         The ``gyrocomp`` metadata of a Parquet file written by this tool
         (the simulator stores its truth there); for one stream of a flight
-        log (:func:`read_recordings`), ``stream``, its key (``sensor_gyro_0``);
-        else empty.
+        log (:func:`read_recordings`), ``stream``, its key (``sensor_gyro_0``),
+        ``autopilot``, ``instance`` and PX4's ``device_id``; else empty.
     axes : sequence of Channel, optional
         The sensor axes; default one angular rate in column ``rate``.
     temperatures : sequence of str, optional
@@ -565,9 +565,10 @@ def read_recordings(path: str | os.PathLike, columns: ColumnSpec = ColumnSpec(),
     A ULog logs ``sensor_gyro`` and ``sensor_accel`` (and each instance)
     with their own time stamps. Given columns of several such streams,
     each stream becomes a recording of its own, on its own time stamps,
-    with its own temperature and ``metadata["stream"]`` its key
-    (``sensor_gyro_0``): nothing is interpolated from one time base onto
-    another. Any other file is :func:`read_recording`.
+    with its own temperature and ``metadata`` what the log says about it
+    (``stream``, its key: ``sensor_gyro_0``; ``autopilot``, ``instance``,
+    PX4's ``device_id``: :func:`gyrocomp.flightlogs.read_logs`): nothing is
+    interpolated from one time base onto another. Any other file is :func:`read_recording`.
 
     Parameters
     ----------
@@ -587,8 +588,8 @@ def read_recordings(path: str | os.PathLike, columns: ColumnSpec = ColumnSpec(),
     options.pop("usecols", None)  # a log's streams are read whole
     sha = file_sha256(name)  # also the one-line error for a missing file
     return [
-        recording_from_frame(frame, name=name, sha256=sha, columns=spec, metadata={"stream": key}, _where=("message", 1), _owned=True, **options)
-        for key, frame, spec in flightlogs.read_logs(name, _kind(name), columns)
+        recording_from_frame(frame, name=name, sha256=sha, columns=spec, metadata=info, _where=("message", 1), _owned=True, **options)
+        for info, frame, spec in flightlogs.read_logs(name, _kind(name), columns)
     ]
 
 

@@ -555,8 +555,8 @@ SWEEP_CASES = [
     ("compensate-gyro-model-on-an-accelerometer", "N5", ["compensate", "x.parquet", "m.json", "--rate-unit", "g", "--out", "c.parquet"], 2, r"m\.json axis rate: a model in deg/s \(angular rate \(gyro\)\) cannot compensate axis rate of x\.parquet, in m/s\^2"),
     ("compensate-full-accelerometer-model-on-a-gyro", "N5", ["compensate", "x.parquet", "acc.json", "--mode", "full", "--out", "c.parquet"], 2, r"acc\.json axis rate: a model in m/s\^2"),
     ("compensate-model-in-furlongs-per-fortnight", "N5", ["compensate", "x.parquet", "furlong.json", "--out", "c.parquet"], 2, r"furlong\.json axis rate: unit 'furlong/fortnight' is not a sensor unit; a model is in deg/s or m/s\^2"),
-    ("export-accelerometer-model-as-px4-gyro", "N5", ["export", "acc.json", "--format", "px4", "--device-id", "1", "--out", "a.params"], 2, r"acc\.json axis rate: --format px4 has no parameter for a model in m/s\^2 \(acceleration \(accelerometer\)\); it takes deg/s"),
-    ("export-accelerometer-model-as-ardupilot-gyro", "N5", ["export", "acc.json", "--format", "ardupilot", "--out", "a.parm"], 2, r"acc\.json axis rate: --format ardupilot has no parameter for a model in m/s\^2"),
+    ("export-model-in-furlongs-as-px4", "N5", ["export", "furlong.json", "--format", "px4", "--device-id", "1", "--out", "a.params"], 2, r"furlong\.json axis rate: unit 'furlong/fortnight' is not a sensor unit"),
+    ("export-model-in-furlongs-as-ardupilot", "N5", ["export", "furlong.json", "--format", "ardupilot", "--out", "a.parm"], 2, r"furlong\.json axis rate: unit 'furlong/fortnight' is not a sensor unit"),
     ("export-model-in-furlongs-as-json", "N5", ["export", "furlong.json", "--format", "json-plain", "--out", "p.json"], 2, r"furlong\.json axis rate: unit 'furlong/fortnight' is not a sensor unit"),
     ("export-c-vectors-from-an-accelerometer", "N5", ["export", "m.json", "--format", "c", "--vectors", "x.parquet", "--rate-unit", "g", "--out", "m.h"], 2, r"m\.json axis rate: a model in deg/s \(angular rate \(gyro\)\) cannot compensate axis rate of x\.parquet, in m/s\^2"),
     ("export-px4-offset-beyond-any-gyro", "N6", ["export", "beyond_float.json", "--format", "px4", "--device-id", "1", "--out", "a.params"], 2, r"beyond_float\.json: export: axis x: the offset reaches -9\.96816e\+39 deg/s at 15 degC, beyond \+-100000 deg/s"),
@@ -631,13 +631,13 @@ def test_an_accelerometer_model_exports_as_plain_json_in_its_unit(tmp_path, swee
 def test_firmware_parameters_beyond_single_precision_are_refused():
     """N6: a parameter a float cannot hold is refused, naming it (was written, and loaded as inf)."""
     from gyrocomp.export.cubic import Cubic
-    from gyrocomp.export.firmware import ardupilot_params, px4_params
+    from gyrocomp.export.firmware import Block, ardupilot_params, px4_params
 
     narrow = Cubic(35.0, (0.0, 0.0, 0.0, 3e40), (35.0 - 1e-12, 35.0 + 1e-12))  # offsets of 3e4 deg/s at most over its range
     with pytest.raises(InputError, match=r"^export: TC_G0_X3_0 = 5\.23\d*e\+38 is beyond single precision \(\+-3\.402823e\+38\), which the firmware stores$"):
-        px4_params({"x": narrow}, device_id=1)
+        px4_params([Block("gyro", 0, {"x": narrow}, 1)])
     with pytest.raises(InputError, match=r"^export: INS_TCAL1_GYR3_X = 5\.23\d*e\+44 is beyond single precision"):
-        ardupilot_params({"x": narrow})
+        ardupilot_params([Block("gyro", 0, {"x": narrow})])
 
 
 @pytest.mark.slow

@@ -44,19 +44,40 @@ def _marks(script: str):
 def test_readme_recipe_runs_as_written(tmp_path, title):
     for name in ("sample_data", "configs"):
         (tmp_path / name).symlink_to(ROOT / name)
+    warmup = _warmup_logs(tmp_path) if "warmup.ulg" in "".join(RECIPES[title]) else None
     for script in RECIPES[title]:
         _bash(script, tmp_path)
     made = set(re.findall(r"--(?:out|plot|markdown) (\S+)", "".join(RECIPES[title])))
     assert made and all((tmp_path / name).stat().st_size > 0 for name in made), made
+    if warmup is not None:  # issue 35: every instance of the warm-up logs within 20 deg/h of the truth, one file per autopilot
+        px4 = warmup.px4_errors(warmup.parameters(tmp_path / "imu.params"))
+        ardupilot = warmup.ardupilot_errors(warmup.parameters(tmp_path / "imu.parm"))
+        assert len(px4) == len(ardupilot) == 2 * warmup.N_INSTANCES
+        assert warmup.within_tolerance(px4) and warmup.within_tolerance(ardupilot), (px4, ardupilot)
+
+
+def _warmup_logs(folder: Path):
+    """Write the warm-up logs of ``tests/warmup_logs.py`` (pyulog, pymavlink) where the recipe reads them; return that module (its truth)."""
+    import importlib.util
+
+    pytest.importorskip("pyulog")
+    pytest.importorskip("pymavlink")
+    spec = importlib.util.spec_from_file_location("warmup_logs", Path(__file__).resolve().parent / "warmup_logs.py")
+    warmup = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(warmup)
+    warmup.write_ulog(folder / "warmup.ulg")
+    warmup.write_dataflash(folder / "warmup.bin")
+    return warmup
 
 
 def test_the_readme_has_the_three_recipes_of_the_issue():
-    """Oven log to autopilot parameters (3 axes, three commands, the firmware config); diagnose; Allan in CI."""
+    """Oven log to autopilot parameters (3 axes, three commands, the firmware config; a PX4 and an ArduPilot warm-up log, every instance); diagnose; Allan in CI."""
     assert len(RECIPES) == 3
     firmware, diagnose, allan = RECIPES.values()
     assert [line.split()[1] for line in firmware[0].strip().splitlines()] == ["train", "compensate", "export"]
     assert "--rate-col gx,gy,gz --config firmware" in firmware[0] and "--format px4" in firmware[0]
     assert "--format ardupilot" in firmware[1]
+    assert "warmup.ulg" in firmware[2] and "--format px4" in firmware[2] and "warmup.bin" in firmware[2] and "--format ardupilot" in firmware[2]
     assert "gyrocomp diagnose" in diagnose[0] and "--holdout" in diagnose[0]
     assert "--max-arw" in allan[0]
 

@@ -96,6 +96,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     cfg = check_tables(apply_overrides(load_config(options.config), options.overrides), PIPELINE_TABLES, options.config)
     pipeline = pipeline_settings(cfg, options.config)
     source, *rest = inputs
+    sensors = {}  # by axis: what a flight log says about its sensor
     if pipeline.parallel and rest:
         (classes,) = rest
         frame, header = artefacts.read_table(source, "gyrocomp.components")
@@ -125,7 +126,9 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         for recording in streams:  # a flight log's streams, each on its own time base
             trained.update(train_axes(recording, cfg, source=options.config, seed=options.seed, workers=options.workers))
             units.update({axis.name: axis.unit for axis in recording.axes})
-    model = model_file(trained, units)
+            if "stream" in recording.metadata:  # what the log says about the sensor: export's instances and device ids
+                sensors.update(dict.fromkeys(recording.axis_names, dict(recording.metadata)))
+    model = model_file(trained, units, sensors)
     artefacts.write_json(out, model)
     if options.plot is not None:
         from gyrocomp.pipeline.compensate import load_models

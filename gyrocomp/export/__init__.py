@@ -21,6 +21,7 @@ import numpy as np
 
 from gyrocomp import units
 from gyrocomp.errors import InputError
+from gyrocomp.export.firmware import AXES
 
 __all__ = ["Format", "FORMATS", "ExportOptions", "export_model", "reference_vectors"]
 
@@ -37,9 +38,10 @@ class ExportOptions:
     axis : str
         Firmware axis (x, y, z) of a single-axis model.
     instance : int or None
-        PX4 slot (0..3, default 0) or ArduPilot IMU (1..3, default 1).
+        PX4 slot (0..3, default 0) or ArduPilot IMU (1..3, default 1) of a
+        model not trained from a flight log (which names its own).
     device_id : int
-        PX4 ``TC_G<i>_ID``.
+        PX4 ``TC_G<i>_ID`` / ``TC_A<i>_ID`` of such a model.
     vectors : gyrocomp.recordings.Recording or None
         c: the recording whose first `n_vectors` samples become the test
         vectors (default: a synthetic sweep across and beyond the training ranges).
@@ -82,9 +84,14 @@ def export_model(model, fmt: str, options: ExportOptions = ExportOptions()) -> t
     ----------
     model : DriftModel or dict of str to DriftModel
         One model (:func:`gyrocomp.pipeline.load_model`), or one per axis
-        (:func:`gyrocomp.pipeline.compensate.load_models`). The firmwares'
-        axes x, y, z are the axes named so or ending so (``gx``, ``gyro_y``),
-        else the first three in order; a single model goes to ``options.axis``.
+        (:func:`gyrocomp.pipeline.compensate.load_models`). px4 and
+        ardupilot write every sensor instance into one file: an axis trained
+        from a flight log goes to its own instance with its device id
+        (``sensor`` in ``model.json``), any other to ``options.instance`` by
+        its unit (gyro deg/s, accelerometer m/s^2). Within an instance the
+        firmwares' axes x, y, z are the axes named so or ending so (``gx``,
+        ``gyro_y``), else the first three in order; a single model goes to
+        ``options.axis``.
         ``c`` writes one block of names per axis (prefix ``<prefix>_<axis>``),
         ``json-plain`` one model per axis under ``axes``.
 
@@ -93,7 +100,10 @@ def export_model(model, fmt: str, options: ExportOptions = ExportOptions()) -> t
     text : str
         The file's content.
     summary : dict
-        ``format``, and for a fitted stand-in ``added_error_deg_h`` (``rms``, ``max``).
+        ``format``; for px4 / ardupilot ``reference`` (one line: TREF, TMIN,
+        TMAX of each instance and the convention), for px4 ``zero_ids``
+        (the ``TC_*_ID`` written as 0); for a fitted stand-in
+        ``added_error_deg_h`` (``rms``, ``max``).
 
     Raises
     ------
@@ -156,43 +166,78 @@ def reference_vectors(model, recording=None, n: int = 2048) -> dict:
 
 
 def _firmware_axes(models: dict, options: ExportOptions) -> dict:
-    """Firmware axis letter of each model axis (see :func:`export_model`)."""
+    """Firmware axis letter of each model axis of one sensor (see :func:`export_model`)."""
     if len(models) == 1:
-        return {next(iter(models)): options.axis}
+        name = next(iter(models))
+        low = str(name).lower()
+        return {name: low[-1] if low[-1:] in AXES and "sensor" in models[name].obj else options.axis}
     if len(models) > 3:
-        raise InputError(f"export: {len(models)} axes; a firmware gyro has x, y and z")
+        raise InputError(f"export: {len(models)} axes of one sensor ({', '.join(map(str, models))}); a firmware sensor has x, y and z")
     letters = {}
     for index, name in enumerate(models):
         low = str(name).lower()
-        letters[name] = low if low in "xyz" and len(low) == 1 else (low[-1] if low[-1:] in ("x", "y", "z") else None)
+        letters[name] = low if low in AXES else (low[-1] if low[-1:] in AXES else None)
     if None in letters.values() or len(set(letters.values())) != len(letters):
-        letters = {name: "xyz"[index] for index, name in enumerate(models)}
+        letters = {name: AXES[index] for index, name in enumerate(models)}
     return letters
 
 
-def _cubics(models: dict, options: ExportOptions, max_degree: int = 3) -> tuple[dict, dict]:
-    from gyrocomp.export.cubic import exact_cubic, nearest_cubic
+def _sensors(models: dict, options: ExportOptions) -> dict:
+    """The models grouped by sensor instance: ``(sensor, instance, device id)`` to ``{axis: model}``.
 
-    cubics, added = {}, {}
-    letters = _firmware_axes(models, options)
+    An axis trained from a flight log carries its instance and device id
+    (``sensor`` in ``model.json``: :func:`gyrocomp.pipeline.train.model_file`);
+    any other to instance None (the format's ``--instance``) and ``options.device_id``, by unit.
+    """
+    from gyrocomp.export.firmware import SENSORS
+
+    logged = [name for name, model in models.items() if "sensor" in model.obj]
+    if logged and (options.instance is not None or options.device_id):
+        given = "--instance" if options.instance is not None else "--device-id"
+        raise InputError(f"export {given}: the model's instances and device ids come from its log ({logged[0]}: {models[logged[0]].obj['sensor'].get('stream')}); drop {given}")
+    groups: dict = {}
     for name, model in models.items():
-        if model.kind == "greybox":
-            cubics[letters[name]] = cubic = _static_part(model, options)
-        elif options.fit_polynomial:
-            try:
-                cubic = exact_cubic(model, max_degree)
-            except InputError:
-                cubic = nearest_cubic(model, max_degree)
+        sensor = SENSORS[units.model_unit(model)]
+        if name in logged:
+            info = model.obj["sensor"]
+            key = (sensor, int(info["instance"]), int(info.get("device_id", 0)))
         else:
-            cubic = exact_cubic(model, max_degree)
-        cubics[letters[name]] = cubic
-        if cubic.added_error_deg_h is not None:
-            added[letters[name]] = cubic.added_error_deg_h
-    summary = {"axes": {letter: name for name, letter in letters.items()}}
+            key = (sensor, None, int(options.device_id))
+        groups.setdefault(key, {})[name] = model
+    return groups
+
+
+def _blocks(models: dict, options: ExportOptions, default_instance: int) -> tuple[list, dict]:
+    """A :class:`~gyrocomp.export.firmware.Block` per sensor instance, with each axis' cubic, and the summary."""
+    from gyrocomp.export.cubic import exact_cubic, nearest_cubic
+    from gyrocomp.export.firmware import Block
+
+    blocks, added, axes = [], {}, {}
+    for (sensor, instance, device_id), group in _sensors(models, options).items():
+        instance = default_instance if instance is None else instance
+        letters = _firmware_axes(group, options)
+        cubics = {}
+        for name, model in group.items():
+            if model.kind == "greybox":
+                cubic = _static_part(model, options)
+            elif options.fit_polynomial:
+                try:
+                    cubic = exact_cubic(model)
+                except InputError:
+                    cubic = nearest_cubic(model)
+            else:
+                cubic = exact_cubic(model)
+            cubics[letters[name]] = cubic
+            label = letters[name] if len(models) <= 3 else f"{sensor}{instance}_{letters[name]}"
+            axes[label] = name
+            if cubic.added_error_deg_h is not None:
+                added[label] = cubic.added_error_deg_h
+        blocks.append(Block(sensor, instance, cubics, device_id))
+    summary = {"axes": axes}
     if added:
         summary["added_error_deg_h"] = {key: max(a[key] for a in added.values()) for key in ("rms", "max")}
         summary["added_error_deg_h_by_axis"] = added
-    return cubics, summary
+    return blocks, summary
 
 
 def _static_part(model, options: ExportOptions):
@@ -217,17 +262,18 @@ def _source(models: dict) -> str:
 def _px4(models: dict, options: ExportOptions):
     from gyrocomp.export.firmware import px4_params
 
-    cubics, summary = _cubics(models, options)
-    instance = 0 if options.instance is None else options.instance
-    return px4_params(cubics, instance=instance, device_id=options.device_id, source=_source(models)), summary
+    blocks, summary = _blocks(models, options, default_instance=0 if options.instance is None else options.instance)
+    text, summary["reference"] = px4_params(blocks, source=_source(models))
+    summary["zero_ids"] = [f"TC_{'G' if b.sensor == 'gyro' else 'A'}{b.instance}_ID" for b in blocks if b.device_id == 0]
+    return text, summary
 
 
 def _ardupilot(models: dict, options: ExportOptions):
     from gyrocomp.export.firmware import ardupilot_params
 
-    cubics, summary = _cubics(models, options)
-    instance = 1 if options.instance is None else options.instance
-    return ardupilot_params(cubics, instance=instance, source=_source(models)), summary
+    blocks, summary = _blocks(models, options, default_instance=0 if options.instance is None else options.instance - 1)
+    text, summary["reference"] = ardupilot_params(blocks, source=_source(models))
+    return text, summary
 
 
 def _c(models: dict, options: ExportOptions):
@@ -294,8 +340,8 @@ def _json_plain(models: dict, options: ExportOptions):
 
 
 FORMATS = {
-    "px4": Format(".params", _px4),
-    "ardupilot": Format(".parm", _ardupilot),
+    "px4": Format(".params", _px4, units=tuple(units.SENSOR_UNITS)),
+    "ardupilot": Format(".parm", _ardupilot, units=tuple(units.SENSOR_UNITS)),
     "c": Format(".h", _c, units=tuple(units.SENSOR_UNITS)),
     "json-plain": Format(".json", _json_plain, units=tuple(units.SENSOR_UNITS)),
 }

@@ -1,130 +1,203 @@
-"""PX4 and ArduPilot gyro thermal-calibration parameters from a temperature polynomial.
+"""PX4 and ArduPilot thermal-calibration parameters of gyros and accelerometers from temperature polynomials.
 
-Both firmwares hold, per IMU and per axis, a cubic in temperature and clamp
-the temperature to the calibrated range before evaluating it; they differ
-in reference temperature, scaling and where the constant goes.
+Both firmwares hold, per IMU sensor and per axis, a cubic in temperature
+and clamp the temperature to the calibrated range before evaluating it;
+they differ in reference temperature, scaling and where the constant goes.
+A file holds every instance given (:class:`Block`: one sensor of one IMU).
 
 * **PX4** (``src/modules/temperature_compensation``; written by
   ``Tools/process_sensor_caldata.py``): ``offset = X0 + X1 dT + X2 dT^2 +
-  X3 dT^3`` [rad/s] with ``dT = clamp(T, TMIN, TMAX) - TREF``, subtracted
-  from the raw rate (``Correct``: ``data - thermal_offset - offset``).
-  Parameters ``TC_G<i>_X<k>_<axis>`` (axis 0, 1, 2 = x, y, z),
-  ``TC_G<i>_TREF``, ``TMIN``, ``TMAX``, ``TC_G<i>_ID`` (the gyro's device
-  id: the calibration applies only to that sensor), ``TC_G_ENABLE``.
-  QGroundControl ``.params``: tab-separated ``vehicle component name value
-  type`` (type 9 REAL32, 6 INT32). TREF here is the training range's
-  midpoint, as PX4's script chooses it.
+  X3 dT^3`` with ``dT = clamp(T, TMIN, TMAX) - TREF``, subtracted from the
+  sensor's value (``Correct``: ``data - thermal_offset - offset``), in
+  rad/s for a gyro (``TC_G<i>_*``) and m/s^2 for an accelerometer
+  (``TC_A<i>_*``). Parameters ``TC_<G|A><i>_X<k>_<axis>`` (axis 0, 1, 2 =
+  x, y, z), ``TREF``, ``TMIN``, ``TMAX``, ``ID`` (the sensor's device id:
+  PX4 applies slot i to the sensor with that id), ``TC_G_ENABLE`` /
+  ``TC_A_ENABLE``. QGroundControl ``.params``: tab-separated ``vehicle
+  component name value type`` (type 9 REAL32, 6 INT32). TREF is each
+  instance's training midpoint, as PX4's script chooses it. An
+  accelerometer's X0 makes the offset 0 at TREF: its constant is gravity
+  plus the bias the 6-point calibration (``CAL_ACC*``) measures, as PX4's
+  script fits the value less its median.
 * **ArduPilot** (``AP_InertialSensor_tempcal``; ``Tools/scripts/tempcal_IMU.py``):
-  ``corrected = raw - P(clamp(T) - 35) + P(clamp(CALTEMP) - 35) - GYROFFS``
-  with ``P(x) = (GYR1 x + GYR2 x^2 + GYR3 x^3) * 1e-6`` [rad/s] about the
-  fixed 35 degC reference; the constant term lives in the gyro offsets
-  ``INS_GYROFFS_<axis>`` (``INS_GYR<n>OFFS_<axis>`` for IMU 2, 3), measured at
-  ``INS_GYR<n>_CALTEMP``. gyrocomp writes the offset its model gives at
-  CALTEMP = the training midpoint, so the three add up to the model. A
+  ``corrected = raw - P(clamp(T) - 35) + P(clamp(CALTEMP) - 35) - OFFS``
+  with ``P(x) = (c1 x + c2 x^2 + c3 x^3) * 1e-6`` about the fixed 35 degC
+  reference, per IMU n (``INS_TCAL<n>_*``, one TMIN/TMAX for its gyro and
+  accelerometer: the intersection of their training ranges), in rad/s for
+  ``GYR1..3`` and m/s^2 for ``ACC1..3``. The gyro's constant lives in
+  ``INS_GYROFFS_<axis>`` (``INS_GYR<n>OFFS_<axis>`` for IMU 2, 3), measured
+  at ``INS_GYR<n>_CALTEMP``: gyrocomp writes the offset its model gives at
+  CALTEMP = the IMU range's midpoint, so the three add up to the model. A
   start-up gyro calibration (``INS_GYR_CAL = 1``, ArduPilot's default)
   re-measures the offset and CALTEMP at every boot, which replaces the
   model's constant by that run's turn-on bias: the temperature part stays.
-  MAVProxy / Mission Planner ``.parm``: ``NAME VALUE`` lines, ``#`` comments.
+  The accelerometer's constant and ``INS_ACC<n>_CALTEMP`` are its 6-point
+  calibration's and are not written (``tempcal_IMU.py`` writes only the
+  polynomial too). MAVProxy / Mission Planner ``.parm``: ``NAME VALUE``
+  lines, ``#`` comments.
 
-gyrocomp's drift is in deg/s and subtracted, the same sign as both
-firmwares' offsets; only the unit (rad/s) changes.
+gyrocomp's drift is subtracted, the same sign as both firmwares' offsets;
+a gyro's unit changes from deg/s to rad/s, an accelerometer's m/s^2 stays.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from gyrocomp.errors import InputError
+from gyrocomp.logparams import ARDUPILOT_REFERENCE_C, ARDUPILOT_SCALE
 
-__all__ = ["AXES", "px4_params", "ardupilot_params", "ARDUPILOT_REFERENCE_C", "ARDUPILOT_SCALE"]
+__all__ = ["AXES", "SENSORS", "Block", "px4_params", "ardupilot_params", "ARDUPILOT_REFERENCE_C", "ARDUPILOT_SCALE"]
 
 AXES = ("x", "y", "z")
-"""Gyro axes in the firmwares' order (PX4 suffix 0, 1, 2; ArduPilot X, Y, Z)."""
+"""Sensor axes in the firmwares' order (PX4 suffix 0, 1, 2; ArduPilot X, Y, Z)."""
 
-ARDUPILOT_REFERENCE_C = 35.0
-"""TEMP_REFERENCE of AP_InertialSensor_tempcal [degC]."""
-
-ARDUPILOT_SCALE = 1.0e6
-"""SCALE_FACTOR of AP_InertialSensor_tempcal: stored coefficient = coefficient [rad/s/degC^k] * 1e6."""
+SENSORS = {"deg/s": "gyro", "m/s^2": "accel"}
+"""The sensor a model's unit calibrates; the firmware parameter families: PX4 ``TC_G`` / ``TC_A``, ArduPilot ``GYR`` / ``ACC``."""
 
 _RAD = math.pi / 180.0
+_FACTOR = {"gyro": _RAD, "accel": 1.0}
+"""From gyrocomp's unit to the firmwares' (deg/s to rad/s; m/s^2 stays)."""
 
 
-def px4_params(cubics: dict, *, instance: int = 0, device_id: int = 0, source: str = "") -> str:
-    """QGroundControl ``.params`` text for PX4's gyro thermal compensation.
+@dataclasses.dataclass(frozen=True)
+class Block:
+    """One sensor of one IMU: what a firmware calibrates as a unit.
+
+    Attributes
+    ----------
+    sensor : {"gyro", "accel"}
+    instance : int
+        The sensor's instance, 0-based (PX4 slot ``TC_G<i>``; ArduPilot IMU ``INS_TCAL<i + 1>``).
+    cubics : dict of str to Cubic
+        Per axis (``"x"``, ``"y"``, ``"z"``), in deg/s (gyro) or m/s^2; the axes not given are not written.
+    device_id : int
+        PX4 ``TC_<G|A><i>_ID``.
+    """
+
+    sensor: str
+    instance: int
+    cubics: dict
+    device_id: int = 0
+
+
+def px4_params(blocks, *, source: str = "") -> tuple[str, str]:
+    """QGroundControl ``.params`` text for PX4's thermal compensation of every block.
 
     Parameters
     ----------
-    cubics : dict of str to Cubic
-        Per axis (``"x"``, ``"y"``, ``"z"``); the axes not given are not written.
-    instance : int
-        Gyro calibration slot i of ``TC_G<i>_*`` (0..3).
-    device_id : int
-        ``TC_G<i>_ID``: PX4 applies the slot to the gyro with this device id
-        (``CAL_GYRO<n>_ID``).
+    blocks : sequence of Block
+        Instance i goes to slot ``TC_G<i>`` / ``TC_A<i>`` (0..3).
     source : str
         Written into the header comment.
+
+    Returns
+    -------
+    text : str
+    statement : str
+        One line: TREF, TMIN and TMAX of each slot and the convention.
     """
-    if not 0 <= instance <= 3:
-        raise InputError(f"--instance {instance}: PX4 has gyro calibration slots 0..3")
-    t_lo, t_hi = _shared_range(cubics)
-    t_ref = 0.5 * (t_lo + t_hi)
-    rows = [("TC_G_ENABLE", 1, 6), (f"TC_G{instance}_ID", int(device_id), 6)]
-    rows += [(f"TC_G{instance}_TMIN", t_lo, 9), (f"TC_G{instance}_TMAX", t_hi, 9), (f"TC_G{instance}_TREF", t_ref, 9)]
-    for axis, cubic in cubics.items():
-        coef = np.asarray(cubic.about(t_ref).coef_dps) * _RAD
-        for k, value in enumerate(_padded(coef, 4)):
-            rows.append((f"TC_G{instance}_X{k}_{AXES.index(axis)}", float(value), 9))
+    _check_blocks(blocks, range(4), "PX4 has calibration slots 0..3")
+    rows, ranges = [], []
+    for sensor, letter in (("gyro", "G"), ("accel", "A")):
+        if any(b.sensor == sensor for b in blocks):
+            rows.append((f"TC_{letter}_ENABLE", 1, 6))
+    for block in blocks:
+        slot = f"TC_{'G' if block.sensor == 'gyro' else 'A'}{block.instance}"
+        t_lo, t_hi = _shared_range(block.cubics, block.sensor)
+        t_ref = 0.5 * (t_lo + t_hi)
+        ranges.append(f"{slot} (id {int(block.device_id)}) TREF {t_ref:.6g} in [{t_lo:.6g}, {t_hi:.6g}]")
+        rows += [(f"{slot}_ID", int(block.device_id), 6), (f"{slot}_TMIN", t_lo, 9), (f"{slot}_TMAX", t_hi, 9), (f"{slot}_TREF", t_ref, 9)]
+        for axis, cubic in block.cubics.items():
+            coef = _padded(cubic.about(t_ref).coef_dps, 4)
+            if block.sensor == "accel":
+                coef[0] = 0.0  # gravity and the bias are the 6-point calibration's
+            for k, value in enumerate(coef):
+                rows.append((f"{slot}_X{k}_{AXES.index(axis)}", float(value * _FACTOR[block.sensor]), 9))
+    statement = f"px4: {'; '.join(ranges)} degC; TREF = each instance's training midpoint (PX4's process_sensor_caldata.py)"
     lines = [
-        "# Gyro thermal compensation parameters (PX4 TC_G*), written by gyrocomp export",
+        "# Thermal compensation parameters (PX4 TC_G*, TC_A*), written by gyrocomp export",
         f"# model: {source}",
-        "# offset [rad/s] = X0 + X1 dT + X2 dT^2 + X3 dT^3, dT = clamp(T, TMIN, TMAX) - TREF; subtracted from the gyro rate",
+        "# offset = X0 + X1 dT + X2 dT^2 + X3 dT^3, dT = clamp(T, TMIN, TMAX) - TREF, subtracted; gyro rad/s, accel m/s^2 (X0 = 0: offset 0 at TREF)",
+        *[f"# {r} degC" for r in ranges],
+        "# TREF = the instance's training midpoint, as PX4's process_sensor_caldata.py; TMIN, TMAX = its training range",
         "#",
         "# Vehicle-Id Component-Id Name Value Type",
     ]
     _check_real32([(name, value) for name, value, kind in rows if kind == 9])
     _check_int32([(name, value) for name, value, kind in rows if kind == 6])
     lines += [f"1\t1\t{name}\t{value!r}\t{kind}" for name, value, kind in rows]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n", statement
 
 
-def ardupilot_params(cubics: dict, *, instance: int = 1, source: str = "") -> str:
-    """MAVProxy / Mission Planner ``.parm`` text for ArduPilot's IMU temperature calibration.
+def ardupilot_params(blocks, *, source: str = "") -> tuple[str, str]:
+    """MAVProxy / Mission Planner ``.parm`` text for ArduPilot's IMU temperature calibration of every block.
 
     Parameters
     ----------
-    cubics : dict of str to Cubic
-        Per axis (``"x"``, ``"y"``, ``"z"``).
-    instance : int
-        IMU n of ``INS_TCAL<n>_*`` (1..3).
+    blocks : sequence of Block
+        Instance i goes to IMU ``INS_TCAL<i + 1>`` (1..3); an IMU's gyro and
+        accelerometer share its TMIN and TMAX.
+    source : str
+        The model, named in the header comment.
+
+    Returns
+    -------
+    text, statement : str
+        The file, and one line giving TMIN, TMAX and CALTEMP of each IMU and the convention.
     """
-    if not 1 <= instance <= 3:
-        raise InputError(f"--instance {instance}: ArduPilot has IMU temperature calibrations 1..3")
-    t_lo, t_hi = _shared_range(cubics)
-    cal_temp = 0.5 * (t_lo + t_hi)
-    offsets_prefix = "INS_GYR" if instance == 1 else f"INS_GYR{instance}"
-    rows = [(f"INS_TCAL{instance}_ENABLE", 1), (f"INS_TCAL{instance}_TMIN", t_lo), (f"INS_TCAL{instance}_TMAX", t_hi)]
-    for axis, cubic in cubics.items():
-        coef = np.asarray(_padded(cubic.about(ARDUPILOT_REFERENCE_C).coef_dps, 4)) * _RAD
-        for k in (1, 2, 3):
-            rows.append((f"INS_TCAL{instance}_GYR{k}_{axis.upper()}", coef[k] * ARDUPILOT_SCALE))
-    for axis, cubic in cubics.items():
-        rows.append((f"{offsets_prefix}OFFS_{axis.upper()}", float(cubic(cal_temp)) * _RAD))
-    rows.append((f"INS_GYR{instance}_CALTEMP", cal_temp))
+    _check_blocks(blocks, range(3), "ArduPilot has IMU temperature calibrations 1..3 (instances 0..2)")
+    rows, ranges = [], []
+    for instance in sorted({b.instance for b in blocks}):
+        n = instance + 1
+        mine = {b.sensor: b for b in blocks if b.instance == instance}
+        limits = [_shared_range(b.cubics, b.sensor) for b in mine.values()]
+        t_lo, t_hi = max(lo for lo, _ in limits), min(hi for _, hi in limits)
+        if not t_lo < t_hi:
+            raise InputError(f"export: IMU {n}'s gyro and accelerometer were trained over temperature ranges {limits} that do not overlap; ArduPilot holds one TMIN/TMAX per IMU")
+        cal_temp = 0.5 * (t_lo + t_hi)
+        rows += [(f"INS_TCAL{n}_ENABLE", 1), (f"INS_TCAL{n}_TMIN", t_lo), (f"INS_TCAL{n}_TMAX", t_hi)]
+        for sensor, family in (("accel", "ACC"), ("gyro", "GYR")):
+            for axis, cubic in (mine[sensor].cubics.items() if sensor in mine else ()):
+                coef = np.asarray(_padded(cubic.about(ARDUPILOT_REFERENCE_C).coef_dps, 4)) * _FACTOR[sensor]
+                rows += [(f"INS_TCAL{n}_{family}{k}_{axis.upper()}", coef[k] * ARDUPILOT_SCALE) for k in (1, 2, 3)]
+        if "gyro" in mine:
+            offsets = "INS_GYR" if n == 1 else f"INS_GYR{n}"
+            rows += [(f"{offsets}OFFS_{axis.upper()}", float(cubic(cal_temp)) * _RAD) for axis, cubic in mine["gyro"].cubics.items()]
+            rows.append((f"INS_GYR{n}_CALTEMP", cal_temp))
+        ranges.append(f"INS_TCAL{n} ({', '.join(mine)}) TMIN {t_lo:.6g}, TMAX {t_hi:.6g}" + (f", INS_GYR{n}_CALTEMP {cal_temp:.6g}" if "gyro" in mine else ""))
+    statement = f"ardupilot: {'; '.join(ranges)} degC; polynomials about ArduPilot's fixed 35 degC, gyro offsets at CALTEMP = the IMU range's midpoint"
     lines = [
-        "# Gyro temperature calibration (ArduPilot INS_TCAL), written by gyrocomp export",
+        "# IMU temperature calibration (ArduPilot INS_TCAL), written by gyrocomp export",
         f"# model: {source}",
-        "# corrected = raw - P(clamp(T) - 35) + P(clamp(CALTEMP) - 35) - GYROFFS, P(x) = 1e-6 (GYR1 x + GYR2 x^2 + GYR3 x^3) [rad/s]",
-        "# a start-up gyro calibration (INS_GYR_CAL = 1) replaces GYROFFS and CALTEMP with the boot's own",
+        "# corrected = raw - P(clamp(T) - 35) + P(clamp(CALTEMP) - 35) - OFFS, P(x) = 1e-6 (c1 x + c2 x^2 + c3 x^3); GYR rad/s, ACC m/s^2",
+        *[f"# {r} degC" for r in ranges],
+        "# the reference is ArduPilot's fixed 35 degC; TMIN, TMAX = the IMU's training range (gyro and accel: their intersection)",
+        "# a start-up gyro calibration (INS_GYR_CAL = 1) replaces GYROFFS and CALTEMP with the boot's own; accel offsets and",
+        "# INS_ACC<n>_CALTEMP stay your accelerometer calibration's",
     ]
     _check_real32(rows)
     lines += [f"{name} {_positional(value)}" for name, value in rows]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n", statement
 
 
-def _shared_range(cubics: dict) -> tuple[float, float]:
+def _check_blocks(blocks, instances: range, message: str) -> None:
+    """Refuse no block, an instance the firmware has no slot for, or one sensor instance twice."""
+    if not blocks:
+        raise InputError("export: no axis to write")
+    seen = set()
+    for block in blocks:
+        if block.instance not in instances:
+            raise InputError(f"export: {block.sensor} instance {block.instance}: {message}")
+        if (block.sensor, block.instance) in seen:
+            raise InputError(f"export: two models of {block.sensor} instance {block.instance}; a firmware holds one calibration per sensor")
+        seen.add((block.sensor, block.instance))
+
+
+def _shared_range(cubics: dict, sensor: str = "gyro") -> tuple[float, float]:
     if not cubics:
         raise InputError("export: no axis to write")
     unknown = [a for a in cubics if a not in AXES]
@@ -136,15 +209,16 @@ def _shared_range(cubics: dict) -> tuple[float, float]:
     lo, hi = ranges.pop()
     if not lo < hi:
         raise InputError(f"export: TMIN = TMAX = {lo!r} degC: the model was trained at one temperature; firmware needs a calibrated range")
-    _check_offsets(cubics, float(lo), float(hi))
+    _check_offsets(cubics, float(lo), float(hi), sensor)
     return float(lo), float(hi)
 
 
-def _check_offsets(cubics: dict, lo: float, hi: float, points: int = 257) -> None:
-    """Refuse a polynomial whose offset over [TMIN, TMAX] no gyro reads (:class:`gyrocomp.recordings.AxisLimits`): single precision would overflow on it."""
+def _check_offsets(cubics: dict, lo: float, hi: float, sensor: str, points: int = 257) -> None:
+    """Refuse a polynomial whose offset over [TMIN, TMAX] no sensor reads (:class:`gyrocomp.recordings.AxisLimits`): single precision would overflow on it."""
     from gyrocomp.recordings import AxisLimits
 
-    bound = AxisLimits().max_abs_deg_s
+    unit = {v: k for k, v in SENSORS.items()}[sensor]
+    bound = AxisLimits().bound(unit)
     grid = np.linspace(lo, hi, points)
     for axis, cubic in cubics.items():
         with np.errstate(over="ignore", invalid="ignore"):
@@ -153,8 +227,8 @@ def _check_offsets(cubics: dict, lo: float, hi: float, points: int = 257) -> Non
         if bad.size:
             i = int(bad[np.argmax(np.abs(values[bad]))]) if np.all(np.isfinite(values[bad])) else int(bad[0])
             raise InputError(
-                f"export: axis {axis}: the offset reaches {float(values[i]):.6g} deg/s at {grid[i]:.6g} degC, beyond +-{bound:g} deg/s "
-                "that any gyro reads (configs/recordings.toml [axes]); a corrupted model"
+                f"export: axis {axis}: the offset reaches {float(values[i]):.6g} {unit} at {grid[i]:.6g} degC, beyond +-{bound:g} {unit} "
+                f"that any {sensor} reads (configs/recordings.toml [axes]); a corrupted model"
             )
 
 

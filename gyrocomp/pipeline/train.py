@@ -442,7 +442,7 @@ def segment_inputs(temperature, fs_hz: float, settings, bounds=None, *, causal: 
     return np.concatenate([rate_estimator.model_inputs(temperature[b], fs_hz, settings, causal=causal) for b in bounds])
 
 
-def model_file(axes: dict, units: dict | None = None) -> dict:
+def model_file(axes: dict, units: dict | None = None, sensors: dict | None = None) -> dict:
     """The ``model.json`` object (version :data:`MODEL_VERSION`) of one model per sensor axis.
 
     Parameters
@@ -453,11 +453,17 @@ def model_file(axes: dict, units: dict | None = None) -> dict:
         They share one header (inputs, settings, seed): the first's.
     units : dict of str to str, optional
         Unit of each axis' values and drift model (``deg/s``, ``m/s^2``).
+    sensors : dict of str to dict, optional
+        For an axis of a flight log, what the log says about its sensor
+        (``stream``, ``autopilot``, ``instance``, PX4's ``device_id``:
+        :func:`gyrocomp.flightlogs.read_logs`); ``export`` writes every
+        instance with its own id.
 
     Returns
     -------
     dict
-        The header and ``axes``: per axis its model without the header, and ``unit``.
+        The header and ``axes``: per axis its model without the header,
+        ``unit``, and ``sensor`` when given.
     """
     first = next(iter(axes.values()))
     header = {key: first[key] for key in _HEADER_KEYS if key in first}
@@ -466,6 +472,8 @@ def model_file(axes: dict, units: dict | None = None) -> dict:
     for name, model in axes.items():
         body[name] = {key: value for key, value in model.items() if key not in _HEADER_KEYS}
         body[name]["unit"] = (units or {}).get(name, "deg/s")
+        if name in (sensors or {}):
+            body[name]["sensor"] = sensors[name]
     return {**header, "axes": body}
 
 
