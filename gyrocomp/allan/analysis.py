@@ -63,6 +63,15 @@ class AllanConfig:
     slope_tolerance : float
         Largest deviation of a local log-log slope from -1/2 (+1/2) for a
         segment to count as the ARW (RRW) line of a read-off.
+    thermal_alpha : float
+        Level of the test whether the long-tau rise follows temperature
+        (:func:`gyrocomp.allan.thermal.temperature_test`).
+    min_clusters : int
+        Fewest independent clusters (floor(N/m), summed over segments) at a
+        tau for a read-off there (:func:`~gyrocomp.allan.fit.add_readoffs`).
+    flat_ratio, flat_span : float
+        B is read only when the curve stays within `flat_ratio` of its
+        minimum over a tau span of at least `flat_span` (a ratio of taus).
     bias_factor : float
         sigma_min / B for flicker rate noise, sqrt(2 ln2/pi) ~ 0.664 ([4]_).
     max_phase_in_memory : int
@@ -79,6 +88,10 @@ class AllanConfig:
     rrw_tau_s: float = 3.0
     slope_tolerance: float = 0.1
     bias_factor: float = 0.664
+    min_clusters: int = 9
+    thermal_alpha: float = 0.01
+    flat_ratio: float = 1.25
+    flat_span: float = 8.0
     max_phase_in_memory: int = 20_000_000
 
     def __post_init__(self):
@@ -87,8 +100,13 @@ class AllanConfig:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0):
                 raise InputError(f"allan {name} = {value!r}; must be a finite number > 0")
-        if not 0.0 < self.confidence < 1.0:
-            raise InputError(f"allan confidence = {self.confidence!r}; must be in (0, 1)")
+        for name in ("confidence", "thermal_alpha"):
+            if not 0.0 < getattr(self, name) < 1.0:
+                raise InputError(f"allan {name} = {getattr(self, name)!r}; must be in (0, 1)")
+        if not (self.flat_ratio > 1.0 and self.flat_span >= 1.0):
+            raise InputError(f"allan flat_ratio = {self.flat_ratio!r}, flat_span = {self.flat_span!r}; need flat_ratio > 1 and flat_span >= 1")
+        if self.min_clusters < 2:
+            raise InputError(f"allan min_clusters = {self.min_clusters!r}; must be >= 2")
         if self.min_acf_points < 3:
             raise InputError(f"allan min_acf_points = {self.min_acf_points!r}; must be >= 3")
         if self.max_phase_in_memory < 0:
@@ -140,6 +158,9 @@ class AllanSeries:
         line).
     segments : int
         Gap-free segments pooled into the series (:func:`pool_segments`).
+    thermal : dict or None
+        Whether the long-tau rise follows temperature
+        (:func:`gyrocomp.allan.thermal.judge`); None without a temperature.
     """
 
     name: str
@@ -156,6 +177,7 @@ class AllanSeries:
     confidence: float
     terms: dict
     segments: int = 1
+    thermal: dict | None = None
 
     def to_dict(self) -> dict:
         """The series in the ``allan.json`` contract shape (plain JSON values)."""
@@ -173,6 +195,7 @@ class AllanSeries:
             "edf": self.edf.tolist(),
             "clusters": [int(v) for v in self.clusters],
             "segments": int(self.segments),
+            "thermal": self.thermal,
             "terms": self.terms,
         }
 
@@ -394,7 +417,7 @@ def _with_terms(name, column, fs_hz, m, avar, n, alpha, edf, clusters, segments,
     lo, hi = chi2_interval(adev, edf, settings.confidence)
     tau = m / fs_hz
     terms = fit_terms(tau, avar, edf, settings.identify_sigmas, settings.model_error)
-    add_readoffs(terms, tau, adev, settings)
+    add_readoffs(terms, tau, adev, clusters, settings)
     return AllanSeries(
         name=name,
         column=column,

@@ -54,6 +54,9 @@ def allan(
     segments: Annotated[
         bool, typer.Option("--segments", help="Also write each gap-free segment's series after the one pooled over them.")
     ] = False,
+    detrend_temperature: Annotated[
+        bool, typer.Option("--detrend-temperature", help="Remove a least-squares cubic in temperature from each axis first.")
+    ] = False,
 ) -> None:
     """Allan deviation of each recording, with confidence bands and IEEE noise terms.
 
@@ -61,6 +64,9 @@ def allan(
     named by its column; all series share one plot. A recording with gaps
     gives one series per axis: the segments' Allan variances averaged at
     each tau, weighted by their terms (--segments adds each segment's).
+    With a temperature column, a rise of the curve beyond its minimum that
+    follows temperature is said in one line, and rrw and rate_ramp are then
+    not identified.
 
     Writes allan.json (and the plot) first, then checks the --max-* bounds,
     which compare the classic read-offs (N at 1 s, B = minimum/0.664, K at

@@ -39,6 +39,9 @@ class Options:
         Column names and units of the recordings.
     resample : bool
         Interpolate a jittered time axis instead of refusing it.
+    detrend_temperature : bool
+        Remove a least-squares cubic in temperature from each axis before
+        the analysis (:func:`gyrocomp.allan.thermal.cubic_in_temperature`).
     segments : bool
         Write each gap-free segment's own series (``<file> segment <k>``)
         after the series pooled over them; the plot keeps one curve per axis.
@@ -54,6 +57,7 @@ class Options:
     columns: ColumnSpec = ColumnSpec()
     resample: bool = False
     segments: bool = False
+    detrend_temperature: bool = False
 
     def __post_init__(self):
         for name in ("max_arw", "max_bias_instability", "max_rrw"):
@@ -113,7 +117,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     column = options.column
     series, curves, records = [], [], []
     for path in inputs:
-        usecols = [] if column == "rate" else [column]
+        usecols = ([] if column == "rate" else [column]) + list(options.columns.temperature_patterns)
         if str(path) != "-" and not options.resample and streaming.supports(path, options.columns):
             found, pooled, record = _streamed(path, options, settings, usecols)
             series += found
@@ -131,18 +135,21 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
             kept = [(k, part) for k, part in enumerate(parts, start=1) if len(parts) == 1 or part.n_samples >= 3]
             axes = {axis.name: axis.unit for axis in rec.axes} if column == "rate" else {column: "deg/s"}
             for name, unit in axes.items():
+                values = [(k, part.axis(name).rate_dps if column == "rate" else part.column(column), part.temperature_c) for k, part in kept]
+                if options.detrend_temperature:
+                    cubic = _cubic(lambda: iter(values), label, rec.temperature_c is not None)
+                    values = [(k, y - cubic(t), t) for k, y, t in values]
                 found = [
-                    al.analyse(
-                        part.axis(name).rate_dps if column == "rate" else part.column(column), rec.fs_hz, taus=options.taus,
-                        name=label if len(parts) == 1 else f"{label} segment {k}", column=name, settings=settings,
-                    )
-                    for k, part in kept
+                    al.analyse(y, rec.fs_hz, taus=options.taus, name=label if len(parts) == 1 else f"{label} segment {k}", column=name, settings=settings)
+                    for k, y, _ in values
                 ]
                 pooled = _pool(found, label, unit, settings)
+                if rec.temperature_c is not None:
+                    _judge(pooled, lambda: iter(values), settings, options.detrend_temperature)
                 series += [pooled, *found] if options.segments and len(found) > 1 else [pooled]
                 curves.append((pooled, unit))
         records.append(_input_record(streams))
-        del streams, rec, parts, kept
+        del streams, rec, parts, kept, values
     resolved = {**settings_dict(settings), "taus": options.taus or settings.taus, "column": column}
     artefacts.write_json(out, al.allan_artefact(series, inputs=records, settings=resolved))
     if options.plot is not None:
@@ -178,14 +185,49 @@ def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, li
         raise InputError(f"{head.name}: no column {column!r} to analyse; it has {', '.join(head.columns)}")
     series, curves = [], []
     label = Path(reader.name).name
+    warm = head.temperature_c is not None
     for name, (pick, unit) in values.items():
+        if options.detrend_temperature:
+            cubic = _cubic(lambda pick=pick: _with_temperature(reader, pick), label, warm)
+            pick = (lambda chunk, pick=pick, cubic=cubic: pick(chunk) - cubic(chunk.temperature_c))
         found = al.analyse_segment_chunks(
             lambda: _pieces(reader, pick), lambda: reader.fs_hz, taus=options.taus, name=label, column=name, settings=settings
         )
         pooled = _pool(found, label, unit, settings)
+        if warm:
+            _judge(pooled, lambda pick=pick: _with_temperature(reader, pick), settings, options.detrend_temperature)
         series += [pooled, *found] if options.segments and len(found) > 1 else [pooled]
         curves.append((pooled, unit))
     return series, curves, reader.input_record()
+
+
+def _with_temperature(reader, pick) -> Iterator[tuple[int, "np.ndarray", "np.ndarray"]]:
+    """``(segment, rate, temperature)`` of each piece of `reader` (:func:`_pieces`): what :mod:`gyrocomp.allan.thermal` reads."""
+    import numpy as np
+
+    for k, both in _pieces(reader, lambda chunk: np.column_stack([pick(chunk), chunk.temperature_c])):
+        yield k, both[:, 0], both[:, 1]
+
+
+def _cubic(pieces, label: str, warm: bool):
+    """The cubic in T that ``--detrend-temperature`` removes (:func:`gyrocomp.allan.thermal.cubic_in_temperature`)."""
+    from gyrocomp.allan import thermal
+
+    if not warm:
+        raise InputError(f"{label}: --detrend-temperature needs a temperature column; there is none (map it with --temp-col)")
+    return thermal.cubic_in_temperature(pieces(), label)
+
+
+def _judge(pooled, pieces, settings, detrended: bool) -> None:
+    """Test whether `pooled`'s long-tau rise follows temperature and say so in one line (:func:`gyrocomp.allan.thermal.judge`)."""
+    import warnings
+
+    from gyrocomp.allan import thermal
+
+    result = thermal.temperature_test(pieces, pooled, min_clusters=settings.min_clusters, alpha=settings.thermal_alpha)
+    message = thermal.judge(pooled, result, detrended=detrended)
+    if message:
+        warnings.warn(message, stacklevel=3)
 
 
 def _pool(found: list, label: str, unit: str, settings):

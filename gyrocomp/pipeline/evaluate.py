@@ -132,7 +132,10 @@ def allan_terms(x, fs_hz: float, settings: EvaluateSettings = EvaluateSettings()
     Both papers read the terms off the Allan curve (Cao et al. 2021, Fig. 17;
     Zhang et al. 2024, Fig. 15), so the IEEE Std 952 read-off is reported:
     ARW on the -1/2 line at tau = 1 s, bias instability the curve's first
-    minimum / 0.664. Where the curve has no -1/2 line starting at the
+    minimum / 0.664, as the papers read it; ``source`` is ``readoff`` when
+    ``allan`` reads B there too (a flat region on enough clusters,
+    :func:`gyrocomp.allan.fit.add_readoffs`), ``minimum`` when it does not
+    (then the figure bounds B from above). Where the curve has no -1/2 line starting at the
     shortest tau (a smoothed output, whose only -1/2 stretch may lie at long
     tau and would be extrapolated to 1 s), the five-term fit's value stands
     in, and ``source`` says so.
@@ -145,18 +148,22 @@ def allan_terms(x, fs_hz: float, settings: EvaluateSettings = EvaluateSettings()
         [deg/s]) for the report's plot.
     """
     from gyrocomp import allan
+    from gyrocomp.allan import ieee952
+    from gyrocomp.allan.fit import first_minimum
 
     series = allan.analyse(np.asarray(x, dtype=float), fs_hz, taus=settings.taus)
     out = {"tau_s": series.tau_s.tolist(), "adev": series.adev.tolist()}
-    for name in ("arw", "bias_instability"):
-        term = series.terms[name]
-        readoff = term.get("readoff")
-        if name == "arw" and readoff is not None and term["readoff_tau_s"][0] > series.tau_s[0]:
-            readoff = None
-        out[name] = {
-            "value": term["value"] if readoff is None else readoff,
-            "unit": term["unit"],
-            "source": "fit" if readoff is None else "readoff",
-            "fit": term["value"],
-        }
+    arw = series.terms["arw"]
+    readoff = arw.get("readoff")
+    if readoff is not None and arw["readoff_tau_s"][0] > series.tau_s[0]:
+        readoff = None
+    out["arw"] = {"value": arw["value"] if readoff is None else readoff, "unit": arw["unit"], "source": "fit" if readoff is None else "readoff", "fit": arw["value"]}
+    bias = series.terms["bias_instability"]
+    minimum = series.adev[first_minimum(series.adev)] / allan.AllanConfig().bias_factor * ieee952.FACTORS["bias_instability"]
+    out["bias_instability"] = {
+        "value": float(minimum),
+        "unit": bias["unit"],
+        "source": "readoff" if bias.get("readoff") is not None else "minimum",
+        "fit": bias["value"],
+    }
     return out
