@@ -84,15 +84,22 @@ def write_table(path: str | os.PathLike, frame: pd.DataFrame | Mapping[str, np.n
 
     The header (see :func:`artefact_header`) goes into the Parquet file's
     key-value metadata under ``gyrocomp``; a CSV table carries no header, so
-    write Parquet wherever traceability matters. `frame` is a DataFrame or
+    write Parquet wherever traceability matters. A CSV is compressed by
+    its extension as recordings are read (``.csv.gz``, ``.csv.bz2``,
+    ``.csv.xz``, ``.csv.zst``, ``.csv.zip``;
+    :func:`gyrocomp.compressed.csv_compression`). `frame` is a DataFrame or
     a mapping of column names to 1-D arrays; a mapping goes to Parquet
     without importing pandas (0.4 s of a command's start-up).
     """
-    if isinstance(frame, Mapping):
-        if str(path) == "-" or Path(path).suffix.lower() in (".csv", ".txt"):
-            import pandas as pd
+    from gyrocomp.compressed import csv_compression, csv_writer
 
-            frame = pd.DataFrame(dict(frame))
+    compression = None if str(path) == "-" else csv_compression(path)
+    suffix = Path(Path(path).stem if compression else path).suffix.lower()
+    csv = str(path) == "-" or suffix in (".csv", ".txt")
+    if isinstance(frame, Mapping) and csv:
+        import pandas as pd
+
+        frame = pd.DataFrame(dict(frame))
     if str(path) == "-":
         frame.to_csv(sys.stdout, index=False, float_format=None)
         sys.stdout.flush()
@@ -100,12 +107,12 @@ def write_table(path: str | os.PathLike, frame: pd.DataFrame | Mapping[str, np.n
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    suffix = Path(path).suffix.lower()
     if suffix not in (".csv", ".txt", ".parquet", ".pq"):
-        raise InputError(f"{path}: unknown extension {suffix!r}; use .csv or .parquet")
+        raise InputError(f"{path}: unknown extension {suffix!r}; use .csv (optionally .gz .bz2 .xz .zst .zip) or .parquet")
     with atomic_path(path) as tmp:
-        if suffix in (".csv", ".txt"):
-            frame.to_csv(tmp, index=False)
+        if csv:
+            with csv_writer(tmp, path) as stream:
+                frame.to_csv(stream, index=False)
         else:
             if isinstance(frame, Mapping):
                 table = pa.Table.from_arrays([_arrow_column(v) for v in frame.values()], names=list(frame))

@@ -22,19 +22,25 @@ whole, as ``zstd -d`` and ``gunzip`` do.
 from __future__ import annotations
 
 import bz2
+import contextlib
 import dataclasses
+import gzip
 import io
 import lzma
 import os
 import zipfile
 import zlib
 from pathlib import Path
+from typing import Iterator, TextIO
 
 from gyrocomp.errors import InputError
 
-__all__ = ["FileLimits", "open_csv", "is_compressed"]
+__all__ = ["FileLimits", "open_csv", "is_compressed", "csv_compression", "csv_writer"]
 
 _SUFFIXES = (".gz", ".bz2", ".xz", ".zst", ".zip")
+
+_METHODS = {".gz": "gzip", ".bz2": "bz2", ".xz": "xz", ".zst": "zstd", ".zip": "zip"}
+"""The compression of each extension :func:`open_csv` reads (pandas' names)."""
 
 _READ_BYTES = 1 << 16
 """Compressed bytes read at a time."""
@@ -61,6 +67,52 @@ class FileLimits:
 def is_compressed(name: str) -> bool:
     """Whether `name` ends in one of the compressed-CSV extensions."""
     return Path(name).suffix.lower() in _SUFFIXES
+
+
+def csv_compression(name: str | os.PathLike) -> dict | None:
+    """How the CSV `name` is compressed (``x.csv.gz`` and the other extensions read here): ``{"method": ...}``, None when it is not.
+
+    A ``.zip`` holds one file named as the archive without ``.zip``
+    (``archive_name``), which is what :func:`open_csv` reads back.
+    """
+    path = Path(name)
+    method = _METHODS.get(path.suffix.lower())
+    if method is None:
+        return None
+    if Path(path.stem).suffix.lower() not in (".csv", ".txt"):
+        raise InputError(f"{name}: a compressed table must be CSV ({''.join(path.suffixes[-2:])!r}); use e.g. .csv.gz")
+    return {"method": method, "archive_name": path.stem} if method == "zip" else {"method": method}
+
+
+@contextlib.contextmanager
+def csv_writer(target: str | os.PathLike, name: str | os.PathLike) -> Iterator[TextIO]:
+    """A text stream writing CSV into the file `target`, compressed as the extension of `name` says (:func:`csv_compression`).
+
+    `target` is where the bytes go (a temporary file that becomes `name`);
+    the stream is one compressed frame, member or archive entry, however
+    many writes it takes, and is finished when the context closes.
+    """
+    compression = csv_compression(name)
+    method = None if compression is None else compression["method"]
+    with contextlib.ExitStack() as stack:
+        if method is None:
+            stream = stack.enter_context(open(target, "w", newline="", encoding="utf-8"))
+        elif method == "zip":
+            archive = stack.enter_context(zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED))
+            raw = stack.enter_context(archive.open(compression["archive_name"], "w", force_zip64=True))
+            stream = stack.enter_context(io.TextIOWrapper(raw, encoding="utf-8", newline=""))
+        elif method == "zstd":
+            import zstandard
+
+            stream = stack.enter_context(zstandard.open(target, "wt", encoding="utf-8", newline=""))
+        elif method == "gzip":  # no name and no time in the header: the same table gives the same bytes
+            raw = stack.enter_context(open(target, "wb"))
+            member = stack.enter_context(gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0))
+            stream = stack.enter_context(io.TextIOWrapper(member, encoding="utf-8", newline=""))
+        else:
+            opener = {"bz2": bz2.open, "xz": lzma.open}[method]
+            stream = stack.enter_context(opener(target, "wt", encoding="utf-8", newline=""))
+        yield stream
 
 
 def open_csv(name: str, limits: FileLimits = FileLimits()) -> io.BufferedReader:

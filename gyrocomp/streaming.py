@@ -353,12 +353,18 @@ class TableWriter:
         self._atomic = None
         self._tmp = None
         self._parquet = None
+        self._csv = contextlib.ExitStack()
+        self._stream = sys.stdout
         self._rows = 0
 
     def __enter__(self) -> "TableWriter":
+        from gyrocomp.compressed import csv_writer
+
         if self.path != "-":
             self._atomic = artefacts.atomic_path(self.path)
             self._tmp = self._atomic.__enter__()
+            if self._kind == "csv":  # one stream (compressed by extension) for every chunk
+                self._stream = self._csv.enter_context(csv_writer(self._tmp, self.path))
         return self
 
     def write(self, columns: dict) -> None:
@@ -366,9 +372,7 @@ class TableWriter:
         if self._kind == "csv":
             import pandas as pd
 
-            target = sys.stdout if self.path == "-" else self._tmp
-            mode = "w" if self._rows == 0 else "a"
-            pd.DataFrame(columns).to_csv(target, index=False, header=self._rows == 0, mode=mode)
+            pd.DataFrame(columns).to_csv(self._stream, index=False, header=self._rows == 0)
             if self.path == "-":
                 sys.stdout.flush()
         else:
@@ -387,6 +391,7 @@ class TableWriter:
 
     def __exit__(self, kind, value, tb) -> None:
         try:
+            self._csv.close()
             if kind is None and self._parquet is not None:
                 self._parquet.close()
                 if not self._first:
