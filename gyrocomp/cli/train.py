@@ -40,6 +40,10 @@ def train(
     workers: Annotated[int, typer.Option("--workers", help="Processes training the axes side by side (direct pipelines); the model does not depend on it.")] = 1,
     overrides: Annotated[Optional[List[str]], typer.Option("--set", help="Override a config value, e.g. --set model.drift.epochs=20 (repeatable).")] = None,
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: bias against temperature, heating and cooling apart, before compensation (with the model) and after it; and raw and compensated rate against time with the temperature.")] = None,
+    even_temperature: Annotated[
+        bool,
+        typer.Option("--even-temperature", help="Weight the fit evenly over temperature: training means averaged in bins of [coverage] bin_c (configs/coverage.toml), as PX4 resamples into temperature bins."),
+    ] = False,
     time_col: TimeCol = "time",
     rate_col: RateCol = "rate",
     temp_col: TempCol = "temperature",
@@ -64,7 +68,9 @@ def train(
     for every axis of --rate-col (gx,gy,gz or a glob: one model per axis, under
     its column's name). A recording with gaps trains on every sample of every
     segment; dT/dt never spans a gap, and a decomposition pipeline
-    decomposes each segment on its own.
+    decomposes each segment on its own. A run whose temperature is quantised
+    (whole degrees), spans under 10 degC or never ramps is named in one warning
+    line each (thresholds in configs/coverage.toml).
     """
     with report_errors(ctx):
         from gyrocomp.commands import from_params, train as stage

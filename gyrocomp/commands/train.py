@@ -35,6 +35,10 @@ class Options:
         axes (``rate="gx,gy,gz"``) give one model each.
     plot : path-like or None
         PNG of :func:`gyrocomp.plots.drift_figure` on the training run, one row per axis.
+    even_temperature : bool
+        Average the training block means within temperature bins of
+        ``[coverage] bin_c`` before the fit (``[model] temperature_bin_c``;
+        :func:`gyrocomp.pipeline.coverage.even_over_temperature`).
     """
 
     config: str = "pe-lcd-anfis"
@@ -43,6 +47,7 @@ class Options:
     workers: int = 1
     columns: ColumnSpec = ColumnSpec()
     plot: Optional[str | os.PathLike] = None
+    even_temperature: bool = False
 
     def __post_init__(self):
         check_seed(self.seed)
@@ -89,12 +94,19 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     from gyrocomp import artefacts, recordings
     from gyrocomp.config import PIPELINE_TABLES, apply_overrides, check_tables, load_config
     from gyrocomp.errors import InputError
-    from gyrocomp.pipeline.settings import pipeline_settings
+    from gyrocomp.pipeline.settings import pipeline_settings, rate_settings
     from gyrocomp.artefacts import file_record
     from gyrocomp.pipeline.train import model_file, train_parallel
 
-    cfg = check_tables(apply_overrides(load_config(options.config), options.overrides), PIPELINE_TABLES, options.config)
+    from gyrocomp.pipeline import coverage
+
+    checks = coverage.get_config()
+    even = (f"model.temperature_bin_c={checks.bin_c!r}",) if options.even_temperature else ()
+    cfg = check_tables(apply_overrides(load_config(options.config), (*even, *options.overrides)), PIPELINE_TABLES, options.config)
     pipeline = pipeline_settings(cfg, options.config)
+    if options.even_temperature and pipeline.kind == "greybox":
+        raise InputError(f"{options.config}: --even-temperature weights block means of a direct or parallel fit; a greybox model fits the runs' dynamics")
+    window_s = rate_settings(cfg, options.config).window_s
     source, *rest = inputs
     sensors = {}  # by axis: what a flight log says about its sensor
     if pipeline.parallel and rest:
@@ -118,6 +130,8 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
                 raise InputError(f"{path}: {len(streams)} streams on their own time bases; select one with --rate-col for a greybox model")
             runs.append(streams[0])
         trained, units = train_greybox(runs, cfg, source=options.config, seed=options.seed)
+        for run in runs:  # once the fit stands: a refused run gets its one error line only
+            coverage.check_run(Path(run.name).name, run.time_s, run.temperature_c, run.segments, window_s, checks)
     else:
         if rest:
             raise InputError(f"{options.config}: a direct pipeline ({pipeline.kind}) trains on the recording alone; drop {rest[0]}")
@@ -125,6 +139,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         trained, units = {}, {}
         for recording in streams:  # a flight log's streams, each on its own time base
             trained.update(train_axes(recording, cfg, source=options.config, seed=options.seed, workers=options.workers))
+            coverage.check_run(Path(recording.name).name, recording.time_s, recording.temperature_c, recording.segments, window_s, checks)
             units.update({axis.name: axis.unit for axis in recording.axes})
             if "stream" in recording.metadata:  # what the log says about the sensor: export's instances and device ids
                 sensors.update(dict.fromkeys(recording.axis_names, dict(recording.metadata)))

@@ -51,7 +51,10 @@ PIPELINE_KINDS = ("pe-lcd-anfis", "iceemdan-se-tfpf-nsga2elm", "polynomial", "fi
 SEGMENTS = ("drift", "mixed")
 """Segments that can carry a learner; a direct pipeline models the whole rate as ``drift``."""
 
-MODEL_KEYS = ("clip_inputs", "clip_output", "max_samples", "min_temperature_span_c", "min_temperature_rate_span_c_per_s", "min_unique_variance")
+MODEL_KEYS = (
+    "clip_inputs", "clip_output", "max_samples", "min_temperature_span_c", "min_temperature_rate_span_c_per_s", "min_unique_variance",
+    "temperature_bin_c",
+)
 """Keys of the ``[model]`` table beside its segments."""
 
 
@@ -172,6 +175,11 @@ class ModelSettings:
         block means that the terms before it must leave unexplained for the
         term to be fitted (:mod:`gyrocomp.identifiability`): 0.01, a
         variance inflation factor of 100.
+    temperature_bin_c : float
+        0, or the width [degC] of the bins within which the training block
+        means are averaged before the fit, so that every degree weighs the
+        same (:func:`gyrocomp.pipeline.coverage.even_over_temperature`;
+        ``train --even-temperature``).
     """
 
     segments: dict
@@ -181,6 +189,7 @@ class ModelSettings:
     min_temperature_span_c: float = 2.0
     min_temperature_rate_span_c_per_s: float = 1e-4
     min_unique_variance: float = 0.01
+    temperature_bin_c: float = 0.0
 
     def to_dict(self) -> dict:
         head = {
@@ -190,6 +199,7 @@ class ModelSettings:
             "min_temperature_span_c": self.min_temperature_span_c,
             "min_temperature_rate_span_c_per_s": self.min_temperature_rate_span_c_per_s,
             "min_unique_variance": self.min_unique_variance,
+            **({"temperature_bin_c": self.temperature_bin_c} if self.temperature_bin_c else {}),  # absent: models trained before it keep their bytes
         }
         return {**head, **{name: spec.to_dict() for name, spec in self.segments.items()}}
 
@@ -225,7 +235,9 @@ def model_settings(config: dict, source: str, parallel: bool) -> ModelSettings:
         raise InputError(f"{source} [model]: max_samples = {max_samples!r} should be an integer >= 0")
     spans = {
         key: table.pop(key, default)
-        for key, default in (("min_temperature_span_c", 2.0), ("min_temperature_rate_span_c_per_s", 1e-4), ("min_unique_variance", 0.01))
+        for key, default in (
+            ("min_temperature_span_c", 2.0), ("min_temperature_rate_span_c_per_s", 1e-4), ("min_unique_variance", 0.01), ("temperature_bin_c", 0.0)
+        )
     }
     for key, value in spans.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):

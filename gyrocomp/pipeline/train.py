@@ -40,6 +40,7 @@ from gyrocomp import artefacts, recordings
 from gyrocomp.config import bind, settings_dict
 from gyrocomp.errors import InputError
 from gyrocomp.pipeline import rate as rate_estimator
+from gyrocomp.pipeline.coverage import even_over_temperature
 from gyrocomp.pipeline.settings import (
     model_settings,
     pipeline_settings,
@@ -552,6 +553,8 @@ def _fit(targets: dict, temperature, fs_hz, config, *, source, seed, settings, i
     learners, not_fitted = {}, {}
     for segment, (y, offset, scale, y_offset, y_scale) in maps.items():
         Xb, yb = np.concatenate(means[segment][0]), np.concatenate(means[segment][1])
+        if model_table.temperature_bin_c:
+            Xb, yb = even_over_temperature(Xb, yb, Xb[:, 0] * scale[0] + offset[0], model_table.temperature_bin_c)
         learner, not_fitted[segment] = _identifiable(model_table.segments[segment], Xb * scale + offset, model_table.min_unique_variance, seed)
         learners[segment] = (learner.fit(Xb, yb), float(np.min(yb)), float(np.max(yb)))
     squares = dict.fromkeys(targets, 0.0)
