@@ -26,6 +26,10 @@ whole process (``python -m gyrocomp ...``), peak resident memory from
     Peak memory of ``train`` (polynomial, ELM, and PE-LCD-ANFIS, which
     decomposes the recording) on the 1x and the 10x recording, and the size
     of the extra input columns.
+``plot``
+    Peak memory of ``compensate --mode causal`` (polynomial) and of
+    ``train --config polynomial`` on 2 h at 1 kHz, without and with
+    ``--plot`` (issue 35 item 9, issue 38: ``--plot`` adds at most 100 MB).
 ``rate``
     The O(1) dT/dt against the direct FIR (``np.convolve``) on 10 min at
     1 kHz, and its rounding after 10^8 samples of a stream against the exact
@@ -145,6 +149,26 @@ def part_memory() -> dict:
         "extra_input_columns_mb": extra_mb,
         "bound_mb": 1.3 * peaks[0] + extra_mb,
     }
+
+
+def part_plot() -> dict:
+    source = oven(DATA / "oven_2h_1khz.parquet", 7200.0)
+    model = models()["polynomial"]
+    runs = {
+        "compensate": gyrocomp("compensate", source, model, "--mode", "causal", "--out", DATA / "p.parquet"),
+        "train": gyrocomp("train", source, "--config", "polynomial", "--out", DATA / "p.json"),
+    }
+    found = {}
+    for name, cmd in runs.items():
+        without = timed(cmd)
+        with_plot = timed([*cmd, "--plot", DATA / f"{name}.png"])
+        found |= {
+            f"{name}_peak_mb": without[2],
+            f"{name}_plot_peak_mb": with_plot[2],
+            f"{name}_plot_adds_mb": with_plot[2] - without[2],
+            f"{name}_plot_wall_ratio": with_plot[0] / without[0],
+        }
+    return found
 
 
 def part_stream() -> dict:
@@ -310,7 +334,7 @@ def part_rate() -> dict:
 def main(parts: list[str]) -> int:
     known = {
         "rate": part_rate, "compensate": part_compensate, "memory": part_memory, "stream": part_stream,
-        "allantools": part_allantools, "big": part_big, "train": part_train,
+        "allantools": part_allantools, "big": part_big, "train": part_train, "plot": part_plot,
     }
     for name in parts or ["rate", "compensate", "memory", "stream"]:
         print(f"-- {name}", flush=True)

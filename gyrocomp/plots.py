@@ -45,6 +45,10 @@ __all__ = [
     "gap_figure",
     "model_curve",
     "drift_axis",
+    "drift_axis_from_means",
+    "BlockMeans",
+    "minmax_columns",
+    "DRIFT_BLOCK_S",
     "CLASS_COLOURS",
 ]
 
@@ -52,6 +56,12 @@ CLASS_COLOURS = {"noise": "tab:red", "mixed": "tab:orange", "drift": "tab:blue"}
 """Colour of each component class, in every figure that shows classes."""
 
 _BRANCH_COLOURS = {"heating": "tab:red", "cooling": "tab:blue", "soak": "0.55"}
+
+_MAX_DPI = 200
+"""Highest resolution [dots per inch] a figure is saved at: a series is decimated to one span per dot column at it (:func:`minmax_columns`)."""
+
+DRIFT_BLOCK_S = 60.0
+"""Length [s] of the blocks whose means :func:`drift_figure` draws."""
 
 
 def save(fig, path: str | os.PathLike, *, dpi: int = 110) -> None:
@@ -82,7 +92,57 @@ def _block_means(x: np.ndarray, block: int, segments: Sequence[slice] | None = N
     return np.concatenate(means)
 
 
-def drift_figure(axes: Sequence[dict], *, block_s: float = 60.0, title: str = ""):
+class BlockMeans:
+    """Means of consecutive blocks of `block` samples of several columns, fed chunk by chunk (as :func:`_block_means` of the whole columns).
+
+    A long log's figure needs only these: memory n / block rows, not n.
+    The last, partial block is dropped unless it is the only one.
+    """
+
+    def __init__(self, block: int):
+        self.block = block
+        self._names: list[str] = []
+        self._means: list[np.ndarray] = []
+        self._carry = np.zeros((0, 0))
+
+    def add(self, columns: dict) -> None:
+        """Take the next rows: a dict of equally long 1-D arrays, the same names every time."""
+        self._names = list(columns)
+        rows = np.column_stack([np.asarray(v, dtype=float) for v in columns.values()])
+        if self._carry.size:
+            rows = np.concatenate([self._carry, rows])
+        n = len(rows) // self.block
+        if n:
+            self._means.append(rows[: n * self.block].reshape(n, self.block, -1).mean(axis=1))
+        self._carry = rows[n * self.block :]
+
+    def means(self) -> dict:
+        """The block means by column name."""
+        means = self._means or [self._carry.mean(axis=0, keepdims=True)]
+        return dict(zip(self._names, np.concatenate(means).T))
+
+
+def minmax_columns(x: np.ndarray, y: np.ndarray, columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """`y` against increasing `x` decimated for drawing: its minimum and maximum in each of `columns` equal spans of `x`.
+
+    Returns the points of one line through each span's minimum and maximum
+    in turn (two a span, empty spans left out), which a line of that many
+    pixel columns draws as the whole series would: the same envelope, in
+    4 x `columns` numbers whatever the series' length.
+    """
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if len(x) <= 2 * columns:
+        return x, y
+    edges = np.searchsorted(x, np.linspace(x[0], x[-1], columns + 1)[1:-1])
+    starts = np.unique(np.concatenate([[0], edges]))
+    starts = starts[starts < len(x)]
+    stops = np.append(starts[1:], len(x))
+    low, high = np.minimum.reduceat(y, starts), np.maximum.reduceat(y, starts)
+    centre = (x[starts] + x[stops - 1]) / 2.0
+    return np.repeat(centre, 2), np.column_stack([low, high]).ravel()
+
+
+def drift_figure(axes: Sequence[dict], *, block_s: float = DRIFT_BLOCK_S, title: str = ""):
     """Bias against temperature before and after compensation, and rate against time, one row per axis.
 
     Parameters
@@ -191,8 +251,9 @@ def _draw_components(fig, time_s, components, title) -> None:
     time = np.asarray(time_s, dtype=float)
     hours = (time - time[0]) / 3600.0
     rows = fig.subplots(len(components), 1, sharex=True, squeeze=False)[:, 0]
+    pixels = int(np.ceil(fig.get_figure(root=True).get_figwidth() * _MAX_DPI))
     for row, (name, values, cls) in zip(rows, components):
-        row.plot(hours, values, color=CLASS_COLOURS.get(cls, "0.3"), linewidth=0.6)
+        row.plot(*minmax_columns(hours, values, pixels), color=CLASS_COLOURS.get(cls, "0.3"), linewidth=0.6)
         row.set_ylabel(name if cls is None else f"{name}\n{cls}", rotation=0, ha="right", va="center", fontsize=8)
         row.tick_params(labelsize=7)
         row.grid(True, alpha=0.3)
@@ -391,6 +452,29 @@ def model_curve(model, n: int = 200) -> tuple[np.ndarray, np.ndarray]:
         return temperature, model.static(temperature)
     X = np.column_stack([temperature, np.zeros(n)])
     return temperature, np.sum(list(model.predict(X, clamp=True).values()), axis=0)
+
+
+def drift_axis_from_means(name: str, parts: Sequence[dict], model) -> dict:
+    """One :func:`drift_figure` axis from the :class:`BlockMeans` of each gap-free segment (``time``, ``temperature``, ``rate``, ``compensated``).
+
+    dT/dt, which only splits the points into branches, is the centred
+    difference of the temperature's block means within each segment.
+    """
+    joined = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+    bounds = np.cumsum([0, *(len(p["time"]) for p in parts)])
+    slope = [np.gradient(p["temperature"], p["time"]) if len(p["time"]) > 1 else np.zeros(len(p["time"])) for p in parts]
+    grid, drift = model_curve(model)
+    return {
+        "name": name,
+        "time_s": joined["time"],
+        "temperature_c": joined["temperature"],
+        "rate_dps": joined["rate"],
+        "compensated_dps": joined.get("compensated"),
+        "temperature_rate_c_per_s": np.concatenate(slope),
+        "model_temperature_c": grid,
+        "model_dps": drift,
+        "segments": [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])],
+    }
 
 
 def drift_axis(name: str, time_s, temperature_c, rate_dps, compensated_dps, model, segments: Sequence[slice] | None = None) -> dict:

@@ -184,3 +184,61 @@ def test_drift_figure_averages_within_segments():
     np.testing.assert_allclose(raw.get_xdata(), (time.reshape(25, n).mean(axis=1) - time[0]) / 3600.0, rtol=1e-12)
     points = sum(len(line.get_xdata()) for line in fig.axes[0].get_lines() if line.get_marker() == ".")
     assert points == 25
+
+
+def test_minmax_columns_keeps_the_envelope_in_two_points_a_column():
+    """Issue 35 item 9: a series is decimated before drawing, to its min and max in each pixel column."""
+    rng = np.random.default_rng(8)
+    x = np.arange(100_000) / 1000.0
+    y = rng.normal(size=x.size)
+    xs, ys = plots.minmax_columns(x, y, 100)
+    assert len(xs) == len(ys) == 200
+    spans = np.array_split(np.arange(x.size), 100)  # equal spans of an evenly sampled x
+    np.testing.assert_allclose(ys[0::2], [y[s].min() for s in spans])
+    np.testing.assert_allclose(ys[1::2], [y[s].max() for s in spans])
+    short_x, short_y = plots.minmax_columns(x[:150], y[:150], 100)
+    np.testing.assert_array_equal(short_y, y[:150])  # nothing to gain: drawn as it is
+
+
+def test_block_means_chunk_by_chunk_equal_the_whole():
+    rng = np.random.default_rng(9)
+    x = rng.normal(size=10_007)
+    for sizes in ([10_007], [1, 999, 9_007], [3_000] * 3 + [1_007]):
+        kept = plots.BlockMeans(600)
+        edges = np.cumsum([0, *sizes])
+        for a, b in zip(edges[:-1], edges[1:]):
+            kept.add({"x": x[a:b], "twice": 2 * x[a:b]})
+        means = kept.means()
+        np.testing.assert_allclose(means["x"], plots._block_means(x, 600), rtol=1e-12)
+        np.testing.assert_allclose(means["twice"], 2 * plots._block_means(x, 600), rtol=1e-12)
+    short = plots.BlockMeans(600)
+    short.add({"x": x[:100]})
+    np.testing.assert_allclose(short.means()["x"], [x[:100].mean()])
+
+
+def test_components_are_drawn_decimated(tmp_path):
+    hours = np.arange(200_000) / 3.6e6
+    components = [("c1", np.sin(np.arange(200_000) / 50.0), "noise"), ("c2", np.arange(200_000) * 1e-6, "drift")]
+    fig = plots.components_figure(hours * 3600.0, components)
+    for ax in fig.axes:
+        (line,) = ax.get_lines()
+        assert len(line.get_xdata()) <= 2 * int(np.ceil(fig.get_figwidth() * 200))
+        assert line.get_ydata().max() == pytest.approx(max(c[1].max() for c in components if c[0] == ax.get_ylabel().split("\n")[0]))
+
+
+def test_compensate_plot_streams(sample, tmp_path, monkeypatch):
+    """compensate --plot in causal mode goes through the streaming writer (constant memory), its figure from block means."""
+    from gyrocomp.commands import compensate as stage
+
+    model = tmp_path / "m.json"
+    runner = CliRunner()
+    assert runner.invoke(app, ["train", str(sample / "oven_train.parquet"), "--config", "polynomial", "--out", str(model)]).exit_code == 0
+
+    def whole(*args, **kwargs):
+        raise AssertionError("compensated whole")
+
+    monkeypatch.setattr(stage, "to_files", whole)
+    png = tmp_path / "c.png"
+    result = runner.invoke(app, ["compensate", str(sample / "oven_test.parquet"), str(model), "--out", str(tmp_path / "c.parquet"), "--plot", str(png)])
+    assert result.exit_code == 0, result.stderr
+    assert png.read_bytes()[:8] == PNG

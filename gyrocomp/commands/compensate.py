@@ -164,10 +164,10 @@ def _compensate_stream(recording, pairs: dict, models: dict, out, plot, model_pa
 
 
 def streams(inputs: Sequence[str | os.PathLike], options: Options = Options()) -> bool:
-    """Whether :func:`stream_to_files` can take these: causal mode, no resampling or plot, CSV or Parquet in seconds."""
+    """Whether :func:`stream_to_files` can take these: causal mode, no resampling, CSV or Parquet in seconds."""
     from gyrocomp import streaming
 
-    return options.mode == "causal" and not options.resample and options.plot is None and streaming.supports(inputs[0], options.columns)
+    return options.mode == "causal" and not options.resample and streaming.supports(inputs[0], options.columns)
 
 
 @guarded(written)
@@ -188,7 +188,8 @@ def stream_to_files(
     axis of each chunk compensated by its
     :class:`~gyrocomp.pipeline.compensate.CausalCompensation` and the chunk
     written at once (``-``: CSV on standard output, flushed after each
-    chunk). The table's bytes are those of :func:`to_files` for a gap-free
+    chunk); the plot is drawn from 60 s block means kept while streaming
+    (:class:`gyrocomp.plots.BlockMeans`). The table's bytes are those of :func:`to_files` for a gap-free
     recording longer than the rate window, the sample rate being the first
     chunk's. A gap raises :class:`gyrocomp.streaming.GapError` (a file with
     gaps goes to :func:`to_files`, which compensates it by segments).
@@ -219,7 +220,9 @@ def stream_to_files(
         records = [chunks.input_record(), artefacts.file_record(model_path)]
         return artefacts.artefact_header(COMPENSATION_SCHEMA, inputs=records, settings={"mode": "causal"}, seed=options.seed)
 
-    streams, figures, pairs = {}, {}, None
+    from gyrocomp import plots
+
+    streams, figures, pairs, means = {}, {}, None, {}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         with streaming.TableWriter(out, header, header_known_first=str(recording_path) != "-") as writer:
@@ -229,6 +232,8 @@ def stream_to_files(
                     clamp = True if options.clamp is None else options.clamp
                     streams = {name: CausalCompensation(model, chunk.fs_hz, chunks.name, clamp=clamp) for name, model in pairs.items()}
                     figures = {name: _RunningFigures() for name in pairs}
+                    if options.plot is not None:
+                        means = {name: plots.BlockMeans(max(1, int(round(plots.DRIFT_BLOCK_S * chunk.fs_hz)))) for name in pairs}
                 columns = {"time": chunk.time_s, **{name: chunk.axis(name).rate_dps for name in pairs}, "temperature": chunk.temperature_c}
                 results = {name: streams[name](columns[name], columns["temperature"], chunk.time_s) for name in pairs}
                 for name in pairs:
@@ -236,6 +241,8 @@ def stream_to_files(
                 for name in pairs:
                     columns[output_name(name, "compensated")] = results[name][1]
                     figures[name].add(columns[name], *results[name])
+                for name, kept in means.items():
+                    kept.add({"time": chunk.time_s, "temperature": columns["temperature"], "rate": columns[name], "compensated": results[name][1]})
                 writer.write(columns)
                 if progress is not None:
                     progress(chunks.n_samples, None)
@@ -245,6 +252,9 @@ def stream_to_files(
             summaries[name] = {**summary, "figures": {"n_samples": chunks.n_samples, "n_segments": 1, "fs_hz": float(chunks.fs_hz), **figures[name].figures()}}
     if str(out) != "-":
         artefacts.write_json(Path(out).with_suffix(".json"), {**header(), "mode": "causal", "axes": summaries})
+    if means:
+        axes = [plots.drift_axis_from_means(name, [kept.means()], pairs[name]) for name, kept in means.items()]
+        plots.save(plots.drift_figure(axes, title=f"{chunks.name} compensated (causal)"), options.plot)
     return chunks.n_samples, summaries, list(caught)
 
 

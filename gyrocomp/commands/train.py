@@ -191,6 +191,13 @@ def _train_components_axes(frame, header: dict, labels: dict, cfg: dict, source,
 def drift_plot(streams, models: dict, path, *, title: str = "", compensated: dict | None = None) -> None:
     """:func:`gyrocomp.plots.drift_figure` of a run, one row per axis, with the model of each axis.
 
+    The figure draws means of 60 s blocks within each segment, so they are
+    all that is kept (:class:`gyrocomp.plots.BlockMeans`): the run is read
+    `_PLOT_ROWS` samples at a time and, unless given, compensated in causal
+    mode chunk by chunk (:class:`~gyrocomp.pipeline.compensate.CausalCompensation`),
+    so that ``--plot`` adds memory of a chunk, not of the run
+    (``benchmarks/bench_long.py plot``).
+
     Parameters
     ----------
     streams : sequence of gyrocomp.recordings.Recording
@@ -203,20 +210,33 @@ def drift_plot(streams, models: dict, path, *, title: str = "", compensated: dic
     import warnings
 
     from gyrocomp import plots
-    from gyrocomp.pipeline.compensate import compensate
+    from gyrocomp.pipeline.compensate import CausalCompensation
 
     axes = []
     owner = {name: rec for rec in streams for name in rec.axis_names}
     for name, model in models.items():
         one = owner[name].axis(name)
-        if compensated is None:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # the training run's own ranges; compensate reports leaving them, the plot need not
-                values = compensate(one, model, "causal")[0]["compensated"].to_numpy()
-        else:
-            values = compensated[name]
-        axes.append(plots.drift_axis(name, one.time_s, one.temperature_c, one.rate_dps, values, model, one.segments))
+        time, temperature, rate = one.time_s, one.temperature_c, one.rate_dps
+        parts = []
+        for seg in one.segments:
+            means = plots.BlockMeans(max(1, int(round(plots.DRIFT_BLOCK_S * one.fs_hz))))
+            causal = None if compensated is not None else CausalCompensation(model, one.fs_hz, one.name)
+            for start in range(seg.start, seg.stop, _PLOT_ROWS):
+                rows = slice(start, min(start + _PLOT_ROWS, seg.stop))
+                if causal is None:
+                    values = compensated[name][rows]
+                else:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")  # the training run's own ranges; compensate reports leaving them, the plot need not
+                        values = causal(rate[rows], temperature[rows], time[rows])[1]
+                means.add({"time": time[rows], "temperature": temperature[rows], "rate": rate[rows], "compensated": values})
+            parts.append(means.means())
+        axes.append(plots.drift_axis_from_means(name, parts, model))
     plots.save(plots.drift_figure(axes, title=title), path)
+
+
+_PLOT_ROWS = 1 << 18
+"""Samples :func:`drift_plot` reads and compensates at a time (8 MB a column)."""
 
 
 def train_axes(recording, config: dict, *, source: str, seed: int | None, workers: int = 1) -> dict:
