@@ -53,29 +53,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any
 
 import numpy as np
-from scipy import linalg, optimize
 
 from gyrocomp.errors import InputError
-from gyrocomp.effects.shapes import first_excursion, hysteresis_branch
-from gyrocomp.identifiability import Refusal, separable
+from gyrocomp.models._greybox_search import Prepared, Search
+from gyrocomp.models._greybox_state import TERMS, Spec, columns_of, kernel
 
 __all__ = ["GreyBoxDrift", "GreyBoxStream", "TrainingRun", "TERMS"]
 
-TERMS = ("thermal_lag", "temp_rate", "hysteresis", "warmup")
-"""The model's optional terms, by their vocabulary names, in the order they are judged."""
-
 VERSION = 1
-
-RATE_GRID_POINTS = 6
-"""Points of the log grid of the dT/dt filter's time constant (then refined)."""
-
-SETTLE_TAUS = 5.0
-"""The causal dT/dt starts at 0 (the filter cold); the first ``SETTLE_TAUS * rate_tau_s[1]`` seconds of a run
-(of every segment when gaps are not bridged) take no part in the fit, so its settling is never read as an effect
-(e^-5: under 1 % of the true rate is missing after them)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -99,24 +86,6 @@ class TrainingRun:
     segments: list
     power_on_s: float | None
     name: str = "run"
-
-
-@dataclasses.dataclass(frozen=True)
-class _Spec:
-    """Nonlinear parameters of a model: 0 or None means the term is absent."""
-
-    tau_e: float = 0.0
-    rate_form: int = 0  # 0 none, 1 one sensitivity, 2 heating and cooling apart
-    width: float = 0.0
-    tau_w: float = 0.0
-    tau_r: float = 0.0  # the dT/dt filter's time constant, with rate_form
-
-    def terms(self) -> list[str]:
-        present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0)
-        return [t for t, on in zip(TERMS, present) if on]
-
-    def n_nonlinear(self) -> int:
-        return int(self.tau_e > 0) + int(self.width > 0) + int(self.tau_w > 0) + int(self.rate_form > 0)
 
 
 class GreyBoxDrift:
@@ -270,9 +239,9 @@ class GreyBoxDrift:
         self.centre_c_, self.half_range_c_ = 0.5 * (lo + hi), max(0.5 * (hi - lo), 1e-3)
         from threadpoolctl import threadpool_limits
 
-        prepared = [_Prepared.of(run, self) for run in runs]
+        prepared = [Prepared.of(run, self) for run in runs]
         with threadpool_limits(limits=1, user_api="blas"):  # small factorisations: threads only contend
-            search = _Search(self, prepared)
+            search = Search(self, prepared)
             spec, self.selection_, self.not_fitted_ = search.run()
             beta, names, noise = search.final(spec)
         self.spec_ = {"tau_e_s": spec.tau_e, "rate_form": spec.rate_form, "width_c": spec.width, "tau_w_s": spec.tau_w, "rate_tau_s": spec.tau_r}
@@ -411,356 +380,12 @@ class GreyBoxStream:
         if self.power_on_s is None and time_s.size:
             self.power_on_s = float(time_s[0])
         m = self.model
-        spec = _Spec(m.spec_["tau_e_s"], m.spec_["rate_form"], m.spec_["width_c"], m.spec_["tau_w_s"], m.spec_["rate_tau_s"])
-        raw = _kernel(time_s, temperature_c, self.state, spec)
+        spec = Spec(m.spec_["tau_e_s"], m.spec_["rate_form"], m.spec_["width_c"], m.spec_["tau_w_s"], m.spec_["rate_tau_s"])
+        raw = kernel(time_s, temperature_c, self.state, spec)
         if self.clamp:  # the cubic is held at the edge of its range, as firmware holds TMIN..TMAX; dT/dt is linear and extrapolates
             np.clip(raw[:, 0], *m.temperature_range_c_, out=raw[:, 0])
-        columns = _columns(raw, time_s, spec, self.power_on_s, m.centre_c_, m.half_range_c_, m.degree)
+        columns = columns_of(raw, time_s, spec, self.power_on_s, m.centre_c_, m.half_range_c_, m.degree)
         out = np.full(time_s.size, m.offset_)
         for name, column in columns.items():
             out += m.coef_.get(name, 0.0) * column
         return out
-
-
-def _kernel(time_s, temperature_c, state, spec: _Spec) -> np.ndarray:
-    """(T_e, dT/dt, play) of each sample; without a dT/dt term the filter runs at 1 s and its output is unused."""
-    from gyrocomp.effects._stateful import advance
-
-    out = np.empty((time_s.size, 3))
-    advance(time_s, temperature_c, state, float(spec.tau_e), float(spec.tau_r or 1.0), 0.5 * float(spec.width), out)
-    return out
-
-
-def _columns(raw, time_s, spec: _Spec, power_on_s, centre, half, degree) -> dict:
-    """The model's design columns of a spec from the kernel's (T_e, dT/dt, play) (no offsets)."""
-    z = (raw[:, 0] - centre) / half
-    columns = {f"z{k}": z**k for k in range(1, degree + 1)}
-    if spec.rate_form:
-        columns["rate"] = raw[:, 1]
-        if spec.rate_form == 2:
-            columns["rate_abs"] = np.abs(raw[:, 1])
-    if spec.width:
-        columns["play"] = raw[:, 2]
-    if spec.tau_w:
-        columns["warmup"] = np.exp(-(time_s - power_on_s) / spec.tau_w)
-    return columns
-
-
-@dataclasses.dataclass
-class _Prepared:
-    """A training run reduced for the likelihood: group means, blocks and their covariance basis."""
-
-    run: TrainingRun
-    time_s: np.ndarray
-    temperature_c: np.ndarray
-    segments: list
-    block_of: np.ndarray  # block index of each reduced sample, -1 when in no whole block
-    n_blocks: int
-    block_s: float
-    starts: np.ndarray
-    y: np.ndarray
-    duration_s: float
-
-    @classmethod
-    def of(cls, run: TrainingRun, model: GreyBoxDrift) -> "_Prepared":
-        t, T, y = (np.asarray(a, dtype=float) for a in (run.time_s, run.temperature_c, run.rate))
-        duration = float(sum(t[s][-1] - t[s][0] for s in run.segments))
-        interval = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-        block_s = max(model.block_s, duration / model.max_blocks, interval)
-        per_block = max(1, int(round(block_s / interval)))
-        group = max(1, per_block // 10)  # ten group means a block: the shapes are slow beside that
-        pb = per_block // group  # group means a block
-        settle_s = SETTLE_TAUS * model.rate_tau_s[1]
-        run_start = t[run.segments[0].indices(t.size)[0]]
-        times, temps, rates, blocks, starts, segs = [], [], [], [], [], []
-        n_blocks = offset = 0
-        for number, s in enumerate(run.segments):
-            lo, hi = s.indices(t.size)[:2]
-            k = (hi - lo) // group
-            if k == 0:
-                continue
-            ts, Ts, ys = (a[lo : lo + k * group].reshape(k, group).mean(axis=1) for a in (t, T, y))
-            skip = int(np.searchsorted(ts, ts[0] + settle_s)) if number == 0 or not model.bridge_gaps else 0
-            whole = max(k - skip, 0) // pb
-            idx = np.full(k, -1)
-            idx[skip : skip + whole * pb] = n_blocks + np.arange(whole * pb) // pb
-            starts.extend(ts[skip : skip + whole * pb : pb] - run_start)
-            n_blocks += whole
-            times.append(ts), temps.append(Ts), rates.append(ys), blocks.append(idx)
-            segs.append(slice(offset, offset + k))
-            offset += k
-        if n_blocks < 8:
-            raise InputError(f"{run.name}: {n_blocks} blocks of {block_s:g} s; the grey-box model needs at least 8 (a longer run)")
-        block_of = np.concatenate(blocks)
-        y_all = np.concatenate(rates)
-        return cls(run, np.concatenate(times), np.concatenate(temps), segs, block_of, n_blocks, per_block * interval,
-                   np.asarray(starts), _block_means(y_all, block_of, n_blocks), duration)
-
-    def raw(self, spec: _Spec, bridge: bool) -> np.ndarray:
-        from gyrocomp.effects._stateful import new_state
-
-        state = new_state()
-        out = np.empty((self.time_s.size, 3))
-        for s in self.segments:
-            if not bridge:
-                state[:] = 0.0
-            out[s] = _kernel(self.time_s[s], self.temperature_c[s], state, spec)
-        return out
-
-    def power_on_column(self, width: float) -> np.ndarray:
-        """1 before the first excursion beyond the play of the power-on temperature (unknown branch), else 0."""
-        beyond = np.flatnonzero(np.abs(self.temperature_c - self.temperature_c[0]) > width)
-        first = beyond[0] if beyond.size else self.temperature_c.size
-        return (np.arange(self.temperature_c.size) < first).astype(float)
-
-    def ranges(self, model: GreyBoxDrift, spec: _Spec) -> tuple:
-        raw = self.raw(spec, model.bridge_gaps)
-        return float(raw[:, 0].min()), float(raw[:, 0].max()), float(raw[:, 1].min()), float(raw[:, 1].max())
-
-
-def _block_means(x: np.ndarray, block_of: np.ndarray, n_blocks: int) -> np.ndarray:
-    keep = block_of >= 0
-    counts = np.bincount(block_of[keep], minlength=n_blocks)
-    if x.ndim == 1:
-        return np.bincount(block_of[keep], weights=x[keep], minlength=n_blocks) / counts
-    return np.column_stack([np.bincount(block_of[keep], weights=c[keep], minlength=n_blocks) / counts for c in x.T])
-
-
-class _Search:
-    """Forward selection of the terms by BIC, each tried only where the runs identify it."""
-
-    def __init__(self, model: GreyBoxDrift, runs: list):
-        from gyrocomp.effects.likelihood import NoiseBasis
-
-        self.model = model
-        self.runs = runs
-        self.bases = [NoiseBasis(r.n_blocks, r.block_s, r.starts) for r in runs]
-        self.n_blocks = sum(r.n_blocks for r in runs)
-        self._raw = {}
-
-    # design ---------------------------------------------------------------
-    def design(self, spec: _Spec) -> tuple[list, list, list]:
-        """Block-mean design of each run, full-rate design of each run and the column names (per-run columns first)."""
-        m = self.model
-        n_runs = len(self.runs)
-        blocks, full, names = [], [], None
-        for i, run in enumerate(self.runs):
-            power_on = run.run.power_on_s if run.run.power_on_s is not None else run.time_s[0]
-            cols = _columns(self._raw_of(i, spec), run.time_s, spec, power_on, m.centre_c_, m.half_range_c_, m.degree)
-            per_run = {f"offset_{j}": np.full(run.time_s.size, float(j == i)) for j in range(n_runs)}
-            if spec.width:
-                per_run |= {f"power_on_{j}": run.power_on_column(spec.width) * (j == i) for j in range(n_runs)}
-            columns = per_run | cols
-            names = list(columns)
-            X = np.column_stack(list(columns.values()))
-            full.append(X)
-            blocks.append(_block_means(X, run.block_of, run.n_blocks))
-        return blocks, full, names
-
-    def n_params(self, spec: _Spec, names: list, noise_free: int) -> int:
-        return len(names) + spec.n_nonlinear() + noise_free
-
-    # likelihood -------------------------------------------------------------
-    def deviance(self, blocks: list, noise) -> tuple[float, np.ndarray]:
-        """-2 log L with beta at its GLS estimate, the runs independent (block-diagonal covariance)."""
-        from gyrocomp.effects.likelihood import NoiseModel
-
-        model = NoiseModel(*noise)
-        yw, Xw, logdet = [], [], 0.0
-        for run, basis, X in zip(self.runs, self.bases, blocks):
-            w = basis.whitener(model)
-            yw.append(w.whiten(run.y))
-            Xw.append(w.whiten(X))
-            logdet += w.logdet
-        yw, Xw = np.concatenate(yw), np.vstack(Xw)
-        beta, *_ = linalg.lstsq(Xw, yw, cond=1e-12, lapack_driver="gelsy", check_finite=False)
-        r = yw - Xw @ beta
-        return float(logdet + r @ r + yw.size * np.log(2 * np.pi)), beta
-
-    def fit_noise(self, blocks: list, start=None) -> tuple:
-        """ML white, flicker and random-walk levels (log-variances by Nelder-Mead); (noise, deviance, beta)."""
-        X = np.vstack(blocks)
-        y = np.concatenate([r.y for r in self.runs])
-        beta = np.linalg.lstsq(X, y, rcond=None)[0]
-        s2 = max(float(np.mean((y - X @ beta) ** 2)), 1e-300)
-        block_s = self.runs[0].block_s
-        arw0 = math.sqrt(s2 * block_s)
-        x0 = np.log([arw0, 0.3 * math.sqrt(s2), 0.3 * math.sqrt(s2) / math.sqrt(block_s)]) if start is None else np.log(np.maximum(start, 1e-30))
-        floor = np.log(arw0) - 12.0
-
-        def objective(v):
-            noise = np.exp(np.maximum(v, floor))
-            return self.deviance(blocks, noise)[0]
-
-        result = optimize.minimize(objective, x0, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-3, "maxiter": 400})
-        noise = tuple(float(v) for v in np.exp(np.maximum(result.x, floor)))
-        deviance, beta = self.deviance(blocks, noise)
-        return noise, deviance, beta
-
-    def bic(self, deviance: float, k: int) -> float:
-        return deviance + k * math.log(self.n_blocks)
-
-    # identifiability ----------------------------------------------------------
-    def _stacked(self, spec: _Spec) -> dict:
-        """Block-mean columns of `spec` over every run, what the fit sees (offsets of runs after the first; the constant is implicit)."""
-        blocks, _, names = self.design(spec)
-        X = np.vstack(blocks)
-        shown = {f"z{k}": ("T_e" if spec.tau_e else "T") + ("" if k == 1 else f"^{k}") for k in range(1, self.model.degree + 1)}
-        return {shown.get(n, n): X[:, j] for j, n in enumerate(names) if n != "offset_0"}
-
-    def identified(self, spec: _Spec, trial: _Spec, term: str):
-        """None when the runs identify `term` at `trial` beside the columns of `spec`, else the :class:`Refusal`.
-
-        The columns judged are those `term` adds; for the thermal lag, which
-        replaces T by T_e in the cubic, the difference ``T_e - T``.
-        """
-        if term == "hysteresis" and not any(_reverses(r.temperature_c, trial.width) for r in self.runs):
-            return Refusal(
-                term, 0.0,
-                f"hysteresis not fitted: the temperature never reverses by more than {trial.width:.3g} degC after its first excursion "
-                "on the training runs, so the branch never changes and the play is a function of T alone; add a run that heats and cools",
-            )
-        base = self._stacked(spec)
-        if term == "thermal_lag":
-            m = self.model
-            lag = [_block_means(self._raw_of(i, trial)[:, 0] - r.temperature_c, r.block_of, r.n_blocks) for i, r in enumerate(self.runs)]
-            added = {"thermal_lag (T_e - T)": np.concatenate(lag)}
-        else:
-            added = {f"{term} ({n})": c for n, c in self._stacked(trial).items() if n not in base}
-        _, refused = separable({**base, **added}, self.model.min_unique_variance)
-        return next((r for r in refused if r.term in added), None)
-
-    def _raw_of(self, i: int, spec: _Spec) -> np.ndarray:
-        key = (i, spec.tau_e, spec.width, spec.tau_r)
-        if key not in self._raw:
-            self._raw[key] = self.runs[i].raw(_Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r), self.model.bridge_gaps)
-        return self._raw[key]
-
-    # search -------------------------------------------------------------------
-    def grids(self) -> dict:
-        m = self.model
-        return {
-            "thermal_lag": [{"tau_e": float(v)} for v in np.geomspace(*m.lag_tau_s, m.grid_points)],
-            "temp_rate": [{"rate_form": form, "tau_r": float(v)} for form in (1, 2) for v in np.geomspace(*m.rate_tau_s, RATE_GRID_POINTS)],
-            "hysteresis": [{"width": float(v)} for v in m.widths_c],
-            "warmup": [{"tau_w": float(v)} for v in np.geomspace(*m.warmup_tau_s, m.grid_points)],
-        }
-
-    def run(self) -> tuple[_Spec, list, list]:
-        """Forward selection; the spec, the accepted steps and the terms the runs cannot identify (with reasons)."""
-        m = self.model
-        spec = _Spec()
-        blocks, _, names = self.design(spec)
-        noise, deviance, _ = self.fit_noise(blocks)
-        score = self.bic(deviance, self.n_params(spec, names, 3))
-        not_fitted = {}
-        if "warmup" in m.terms and any(r.run.power_on_s is None for r in self.runs):
-            not_fitted["warmup"] = (
-                "warmup not fitted: a training run does not start at power-on and gives no power-on time, so the time since power-on is unknown"
-            )
-        grids = self.grids()
-        for term in m.terms:  # judged against the baseline: a term no parameter of its grid separates from it
-            if term in not_fitted:
-                continue
-            refusals = [self.identified(spec, dataclasses.replace(spec, **change), term) for change in grids[term]]
-            if all(r is not None for r in refusals):
-                not_fitted[term] = max(refusals, key=lambda r: r.unique).reason  # the nearest miss (the narrowest play)
-        remaining = [t for t in m.terms if t not in not_fitted]
-        steps = []
-        while remaining:
-            best = None
-            for term in remaining:
-                for change in grids[term]:
-                    if term == "temp_rate" and change["rate_form"] <= spec.rate_form:
-                        continue  # a selected sensitivity may still split into heating and cooling
-                    trial = dataclasses.replace(spec, **change)
-                    if self.identified(spec, trial, term) is not None:
-                        continue  # not separable, at this parameter, from what the model holds
-                    t_blocks, _, t_names = self.design(trial)
-                    trial_score = self.bic(self.deviance(t_blocks, noise)[0], self.n_params(trial, t_names, 3))
-                    if best is None or trial_score < best[0]:
-                        best = (trial_score, term, trial)
-            if best is None:
-                break
-            _, term, trial = best
-            t_blocks, _, t_names = self.design(trial)
-            t_noise, t_dev, _ = self.fit_noise(t_blocks, noise)
-            t_score = self.bic(t_dev, self.n_params(trial, t_names, 3))
-            upgrade = term == "temp_rate" and spec.rate_form > 0  # heating and cooling apart must pay, whatever `selection`
-            if (m.selection == "bic" or upgrade) and score - t_score <= m.bic_margin:
-                if upgrade and m.selection == "all" and len(remaining) > 1:
-                    remaining.remove(term)
-                    continue
-                break
-            steps.append({"term": term, "params": _params(trial, term), "delta_bic": float(t_score - score)})
-            spec, noise, score = trial, t_noise, t_score
-            if term != "temp_rate" or spec.rate_form == 2:
-                remaining.remove(term)
-        spec = self.refine(spec, noise)
-        blocks, _, _ = self.design(spec)
-        self.noise = self.fit_noise(blocks, noise)[0]
-        for step in steps:
-            step["params"] = _params(spec, step["term"])
-        return spec, steps, [{"term": t, "reason": not_fitted[t]} for t in m.terms if t in not_fitted]
-
-    def refine(self, spec: _Spec, noise) -> _Spec:
-        """Each selected nonlinear parameter off its grid: two rounds of a bounded search of the deviance in its logarithm.
-
-        The bounds are the grid's neighbours of the value (a factor of the
-        grid's spacing either way, within the configured range), so the
-        search settles the value the grid bracketed and never wanders to
-        another minimum. A parameter
-        at which the runs no longer identify its term is not taken.
-        """
-        spacing = {
-            "tau_e": (self.model.lag_tau_s[1] / self.model.lag_tau_s[0]) ** (1 / (self.model.grid_points - 1)),
-            "tau_w": (self.model.warmup_tau_s[1] / self.model.warmup_tau_s[0]) ** (1 / (self.model.grid_points - 1)),
-            "width": max(b / a for a, b in zip(sorted(self.model.widths_c), sorted(self.model.widths_c)[1:])) if len(self.model.widths_c) > 1 else 2.0,
-            "tau_r": (self.model.rate_tau_s[1] / self.model.rate_tau_s[0]) ** (1 / (RATE_GRID_POINTS - 1)),
-        }
-        terms = {"tau_e": "thermal_lag", "tau_w": "warmup", "width": "hysteresis", "tau_r": "temp_rate"}
-        m = self.model
-        ranges = {"tau_e": m.lag_tau_s, "tau_w": m.warmup_tau_s, "width": (min(m.widths_c), max(m.widths_c)), "tau_r": m.rate_tau_s}
-        without = {"tau_e": {"tau_e": 0.0}, "tau_w": {"tau_w": 0.0}, "width": {"width": 0.0}, "tau_r": {"rate_form": 0, "tau_r": 0.0}}
-        for _ in range(2):
-            for key, factor in spacing.items():
-                value = getattr(spec, key)
-                if not value:
-                    continue
-
-                def deviance(log_value, key=key):
-                    trial = dataclasses.replace(spec, **{key: float(np.exp(log_value))})
-                    return self.deviance(self.design(trial)[0], noise)[0]
-
-                lo, hi = ranges[key]
-                bounds = (math.log(max(value / factor, lo)), math.log(min(value * factor, hi)))
-                if bounds[1] - bounds[0] < 1e-9:
-                    continue
-                result = optimize.minimize_scalar(deviance, bounds=bounds, method="bounded", options={"xatol": 1e-3})
-                trial = dataclasses.replace(spec, **{key: float(np.exp(result.x))})
-                base = dataclasses.replace(spec, **without[key])
-                if result.fun < deviance(math.log(value)) and self.identified(base, trial, terms[key]) is None:
-                    spec = trial
-        return spec
-
-    def final(self, spec: _Spec):
-        blocks, _, names = self.design(spec)
-        deviance, beta = self.deviance(blocks, self.noise)
-        return beta, names, self.noise
-
-
-def _params(spec: _Spec, term: str) -> dict:
-    return {
-        "thermal_lag": {"tau_s": spec.tau_e},
-        "temp_rate": {"heating_cooling_apart": spec.rate_form == 2, "filter_tau_s": spec.tau_r},
-        "hysteresis": {"width_c": spec.width},
-        "warmup": {"tau_s": spec.tau_w},
-    }[term]
-
-
-def _reverses(temperature_c, width_c) -> bool:
-    """Whether the play of `width_c` changes branch after the first excursion beyond it (:func:`~gyrocomp.effects.shapes.hysteresis_branch`)."""
-    first = first_excursion(temperature_c, width_c)
-    branch = hysteresis_branch(np.arange(temperature_c.size, dtype=float), temperature_c, width_c)
-    return bool(first < temperature_c.size and np.any(branch[first:] != branch[first]))
-
