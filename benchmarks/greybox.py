@@ -21,7 +21,7 @@ deviation of the 100 s means of ``rate - model`` after its mean is removed
   on the even bursts and held out on the odd ones; the statistic is the
   standard deviation of the burst means (5 s each).
 
-Usage: ``python benchmarks/greybox.py [--part sample|independent|strong|heating_cooling|tvac|all] [--seeds 3001 3002]``
+Usage: ``python benchmarks/greybox.py [--part sample|independent|strong|heating_cooling|tvac|all] [--seeds 3003 3004] [--key NAME]``
 (``strong``: the independent pairs with effects of visibility 200 to 400);
 writes each part under ``runs`` of ``benchmarks/results/greybox.json`` with its provenance (:mod:`provenance`).
 """
@@ -44,8 +44,10 @@ import numpy as np  # noqa: E402
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
-CHECK_SEEDS = (3001, 3002)
-"""Seeds of the independent generator never looked at while the grey-box model was built."""
+CHECK_SEEDS = (3003, 3004)
+"""Seeds of the independent generator never looked at while the grey-box model was built. 3001 and 3002 were the
+first version's; their misses (relay and Preisach hysteresis, two heat paths, two-exponential warm-ups) shaped the
+second, so they are spent: ``--seeds 3001 3002 --key strong_spent`` reruns them."""
 KEYS = [
     "thermal_lag/first_order", "thermal_lag/two_parallel_lags", "thermal_lag/two_lags_in_series",
     "temp_rate/linear", "temp_rate/heating_cooling_asymmetric", "temp_rate/saturating",
@@ -296,6 +298,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--part", default="all", choices=["sample", "independent", "strong", "heating_cooling", "tvac", "speed", "all"])
     parser.add_argument("--seeds", type=int, nargs="+", default=list(CHECK_SEEDS))
+    parser.add_argument("--key", help="results key of a single part (default: the part's name)")
     args = parser.parse_args(argv)
     sys.path.insert(0, str(ROOT))
     from provenance import write
@@ -307,7 +310,7 @@ def main(argv=None):
         else:
             figures = globals()[part]()
         figures = figures if isinstance(figures, dict) else {"rows": figures}
-        write("greybox", figures, key=part)
+        write("greybox", figures, key=args.key if args.key and len(parts) == 1 else part)
         print(part, json.dumps({k: v for k, v in figures.items() if k != "rows"}, indent=1, default=float))
 
 

@@ -7,8 +7,13 @@ step: the temperature bridged linearly, as ``bridge_gaps`` does):
 
 * ``T_e <- a T_e + (1 - c) T + (c - a) T_prev`` with ``a = exp(-h / tau_e)``,
   ``c = -tau_e expm1(-h / tau_e) / h``; the rate filter ``T_f`` likewise;
-* the play's centre ``p <- min(max(p, T - w/2), T + w/2)``;
-* ``drift = offset + sum_k c_k z^k + g dT/dt + a |dT/dt| + h play + A exp(-t_on / tau_w)``,
+* the play's centre ``p <- min(max(p, T - w/2), T + w/2)``, or the relay's
+  branch ``br`` (0 until the first excursion of ``w``; then -1 once T falls
+  ``w`` below its highest since the last switch, +1 once it rises ``w``
+  above its lowest);
+* a second element temperature ``T_e2`` as ``T_e``;
+* ``drift = offset + sum_k c_k z^k + g dT/dt + a |dT/dt| + h play (or h br)
+  + l (T_e2 - T_e) / half_range + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2)``,
   ``z = (clamp(T_e) - centre) / half_range``, ``dT/dt = (T - T_f) / tau_r``.
 
 No ``malloc``; ``exp`` and ``expm1`` from libm (C99). ``GYROCOMP_REAL`` =
@@ -59,16 +64,23 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         terms.append(f"({P}_real){_num(coef['rate'])} * r")
         if spec["rate_form"] == 2:
             terms.append(f"({P}_real){_num(coef['rate_abs'])} * (r < 0 ? -r : r)")
-    if spec["width_c"]:
+    relay = spec["width_c"] and spec["hysteresis_operator"] == "relay"
+    if relay:
+        terms.append(f"({P}_real){_num(coef['relay'])} * s->br")
+    elif spec["width_c"]:
         terms.append(f"({P}_real){_num(coef['play'])} * (t_c - s->p) / ({P}_real){_num(0.5 * spec['width_c'])}")
-    if spec["tau_w_s"]:
-        terms.append(f"({P}_real){_num(coef['warmup'])} * exp(-(t - s->t_on) / ({P}_real){_num(spec['tau_w_s'])})")
+    if spec["tau_e_s"] and spec["tau_e2_s"]:
+        terms.append(f"({P}_real){_num(coef['lag2'])} * (s->te2 - s->te) / ({P}_real){_num(e.half_range_c_)}")
+    for key, tau in (("warmup", "tau_w_s"), ("warmup2", "tau_w2_s")):
+        if spec["tau_w_s"] and spec[tau]:
+            terms.append(f"({P}_real){_num(coef[key])} * exp(-(t - s->t_on) / ({P}_real){_num(spec[tau])})")
     half = _num(0.5 * spec["width_c"])
     lines = [
         f"/* {prefix}.h: causal grey-box gyro drift compensation, written by gyrocomp export --format c.",
         " * compensated = rate - drift(state, t, T); rate in deg/s, T in degC, t in s (any steps; a gap bridges T linearly).",
         f" * terms: element lag tau_e = {spec['tau_e_s']:.6g} s, dT/dt filter {tau_r:g} s, play width {spec['width_c']:.6g} degC,",
-        f" * warm-up tau = {spec['tau_w_s']:.6g} s (0: absent). Define GYROCOMP_REAL as float for single precision,",
+        f" * hysteresis operator {spec['hysteresis_operator']}, second element lag {spec['tau_e2_s']:.6g} s,",
+        f" * warm-up tau = {spec['tau_w_s']:.6g} s and {spec['tau_w2_s']:.6g} s (0: absent). Define GYROCOMP_REAL as float for single precision,",
         " * GYROCOMP_NO_CLAMP to extrapolate the cubic beyond the training range.",
         f" * Usage: {P}_state s; {P}_init(&s); for each sample: y = {P}_update(&s, t, T, rate); */",
         f"#ifndef {U}_H",
@@ -81,10 +93,12 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         "",
         "typedef struct {",
         "    int started;",
-        f"    {P}_real t_prev, T_prev, te, tf, p, t_on;",
+        f"    {P}_real t_prev, T_prev, te, tf, p, t_on, br, hi, lo, te2;",
         f"}} {P}_state;",
         "",
-        f"static void {P}_init({P}_state *s) {{ s->started = 0; s->t_prev = s->T_prev = s->te = s->tf = s->p = s->t_on = 0; }}",
+        f"static void {P}_init({P}_state *s) {{",
+        "    s->started = 0; s->t_prev = s->T_prev = s->te = s->tf = s->p = s->t_on = s->br = s->hi = s->lo = s->te2 = 0;",
+        "}",
         "",
         f"static {P}_real {P}_hold({P}_real x, {P}_real prev, {P}_real cur, {P}_real h, {P}_real tau) {{",
         "    if (tau <= 0) return cur;",
@@ -98,14 +112,19 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         f"static {P}_real {P}_update({P}_state *s, {P}_real t, {P}_real t_c, {P}_real rate) {{",
         f"    {P}_real r, z, te;",
         "    if (!s->started) {",
-        "        s->started = 1; s->te = s->tf = s->p = t_c; s->t_on = t;",
+        "        s->started = 1; s->te = s->tf = s->p = s->hi = s->lo = s->te2 = t_c; s->br = 0; s->t_on = t;",
         "    } else {",
         f"        const {P}_real h = t - s->t_prev;",
         f"        s->te = {P}_hold(s->te, s->T_prev, t_c, h, ({P}_real){_num(spec['tau_e_s'])});",
         f"        s->tf = {P}_hold(s->tf, s->T_prev, t_c, h, ({P}_real){_num(tau_r)});",
         f"        if (s->p < t_c - ({P}_real){half}) s->p = t_c - ({P}_real){half};",
         f"        if (s->p > t_c + ({P}_real){half}) s->p = t_c + ({P}_real){half};",
+        f"        s->te2 = {P}_hold(s->te2, s->T_prev, t_c, h, ({P}_real){_num(spec['tau_e2_s'])});",
         "    }",
+        f"    if (s->br >= 0 && s->hi - t_c > ({P}_real){_num(spec['width_c'])}) {{ s->br = -1; s->lo = t_c; }}",
+        f"    else if (s->br <= 0 && t_c - s->lo > ({P}_real){_num(spec['width_c'])}) {{ s->br = 1; s->hi = t_c; }}",
+        "    if (t_c > s->hi) s->hi = t_c;",
+        "    if (t_c < s->lo) s->lo = t_c;",
         "    s->t_prev = t; s->T_prev = t_c;",
         f"    r = (t_c - s->tf) / ({P}_real){_num(tau_r)};",
         "    te = s->te;",

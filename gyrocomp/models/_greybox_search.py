@@ -18,7 +18,7 @@ from scipy import linalg, optimize
 from gyrocomp.effects.shapes import first_excursion, hysteresis_branch
 from gyrocomp.errors import InputError
 from gyrocomp.identifiability import Refusal, separable
-from gyrocomp.models._greybox_state import Spec, columns_of, kernel
+from gyrocomp.models._greybox_state import SECOND_OF, Spec, columns_of, kernel
 
 __all__ = ["Prepared", "Search", "RATE_GRID_POINTS", "SETTLE_TAUS"]
 
@@ -47,7 +47,7 @@ class Prepared:
     duration_s: float
 
     @classmethod
-    def of(cls, run: TrainingRun, model: GreyBoxDrift) -> "Prepared":
+    def of(cls, run: TrainingRun, model) -> "Prepared":
         t, T, y = (np.asarray(a, dtype=float) for a in (run.time_s, run.temperature_c, run.rate))
         duration = float(sum(t[s][-1] - t[s][0] for s in run.segments))
         interval = float(np.median(np.diff(t))) if t.size > 1 else 1.0
@@ -85,7 +85,7 @@ class Prepared:
         from gyrocomp.effects._stateful import new_state
 
         state = new_state()
-        out = np.empty((self.time_s.size, 3))
+        out = np.empty((self.time_s.size, 4))
         for s in self.segments:
             if not bridge:
                 state[:] = 0.0
@@ -98,7 +98,7 @@ class Prepared:
         first = beyond[0] if beyond.size else self.temperature_c.size
         return (np.arange(self.temperature_c.size) < first).astype(float)
 
-    def ranges(self, model: GreyBoxDrift, spec: Spec) -> tuple:
+    def ranges(self, model, spec: Spec) -> tuple:
         raw = self.raw(spec, model.bridge_gaps)
         return float(raw[:, 0].min()), float(raw[:, 0].max()), float(raw[:, 1].min()), float(raw[:, 1].max())
 
@@ -114,7 +114,7 @@ def block_means(x: np.ndarray, block_of: np.ndarray, n_blocks: int) -> np.ndarra
 class Search:
     """Forward selection of the terms by BIC, each tried only where the runs identify it."""
 
-    def __init__(self, model: GreyBoxDrift, runs: list):
+    def __init__(self, model, runs: list):
         from gyrocomp.effects.likelihood import NoiseBasis
 
         self.model = model
@@ -134,7 +134,8 @@ class Search:
             cols = columns_of(self._raw_of(i, spec), run.time_s, spec, power_on, m.centre_c_, m.half_range_c_, m.degree)
             per_run = {f"offset_{j}": np.full(run.time_s.size, float(j == i)) for j in range(n_runs)}
             if spec.width:
-                per_run |= {f"power_on_{j}": run.power_on_column(spec.width) * (j == i) for j in range(n_runs)}
+                unknown = (self._raw_of(i, spec)[:, 2] == 0.0).astype(float) if spec.relay else run.power_on_column(spec.width)
+                per_run |= {f"power_on_{j}": unknown * (j == i) for j in range(n_runs)}
             columns = per_run | cols
             names = list(columns)
             X = np.column_stack(list(columns.values()))
@@ -216,9 +217,10 @@ class Search:
         return next((r for r in refused if r.term in added), None)
 
     def _raw_of(self, i: int, spec: Spec) -> np.ndarray:
-        key = (i, spec.tau_e, spec.width, spec.tau_r)
+        key = (i, spec.tau_e, spec.width, spec.tau_r, spec.relay, spec.tau_e2)
         if key not in self._raw:
-            self._raw[key] = self.runs[i].raw(Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r), self.model.bridge_gaps)
+            states = Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r, spec.relay, spec.tau_e2)
+            self._raw[key] = self.runs[i].raw(states, self.model.bridge_gaps)
         return self._raw[key]
 
     # search -------------------------------------------------------------------
@@ -227,8 +229,10 @@ class Search:
         return {
             "thermal_lag": [{"tau_e": float(v)} for v in np.geomspace(*m.lag_tau_s, m.grid_points)],
             "temp_rate": [{"rate_form": form, "tau_r": float(v)} for form in (1, 2) for v in np.geomspace(*m.rate_tau_s, RATE_GRID_POINTS)],
-            "hysteresis": [{"width": float(v)} for v in m.widths_c],
+            "hysteresis": [{"width": float(v), "relay": relay} for relay in (False, True) for v in m.widths_c],
             "warmup": [{"tau_w": float(v)} for v in np.geomspace(*m.warmup_tau_s, m.grid_points)],
+            "second_lag": _pairs("tau_e", "tau_e2", np.geomspace(*m.lag_tau_s, m.grid_points)),
+            "second_warmup": _pairs("tau_w", "tau_w2", np.geomspace(*m.warmup_tau_s, m.grid_points)),
         }
 
     def run(self) -> tuple[Spec, list, list]:
@@ -245,11 +249,14 @@ class Search:
             )
         grids = self.grids()
         for term in m.terms:  # judged against the baseline: a term no parameter of its grid separates from it
-            if term in not_fitted:
+            if term in not_fitted or term in SECOND_OF:  # a second time constant is judged beside its first, once that is in
                 continue
             refusals = [self.identified(spec, dataclasses.replace(spec, **change), term) for change in grids[term]]
             if all(r is not None for r in refusals):
                 not_fitted[term] = max(refusals, key=lambda r: r.unique).reason  # the nearest miss (the narrowest play)
+        for second, first in SECOND_OF.items():  # a second time constant where its first cannot be fitted
+            if second in m.terms and first in not_fitted:
+                not_fitted[second] = f"{second} not fitted: {first} is not ({not_fitted[first].split(': ', 1)[1]})"
         remaining = [t for t in m.terms if t not in not_fitted]
         steps = []
         while remaining:
@@ -258,6 +265,8 @@ class Search:
                 for change in grids[term]:
                     if term == "temp_rate" and change["rate_form"] <= spec.rate_form:
                         continue  # a selected sensitivity may still split into heating and cooling
+                    if term in SECOND_OF and SECOND_OF[term] not in spec.terms():
+                        continue  # a second time constant only beside the first
                     trial = dataclasses.replace(spec, **change)
                     if self.identified(spec, trial, term) is not None:
                         continue  # not separable, at this parameter, from what the model holds
@@ -303,10 +312,13 @@ class Search:
             "width": max(b / a for a, b in zip(sorted(self.model.widths_c), sorted(self.model.widths_c)[1:])) if len(self.model.widths_c) > 1 else 2.0,
             "tau_r": (self.model.rate_tau_s[1] / self.model.rate_tau_s[0]) ** (1 / (RATE_GRID_POINTS - 1)),
         }
-        terms = {"tau_e": "thermal_lag", "tau_w": "warmup", "width": "hysteresis", "tau_r": "temp_rate"}
+        spacing |= {"tau_e2": spacing["tau_e"], "tau_w2": spacing["tau_w"]}
+        terms = {"tau_e": "thermal_lag", "tau_w": "warmup", "width": "hysteresis", "tau_r": "temp_rate", "tau_e2": "second_lag", "tau_w2": "second_warmup"}
         m = self.model
-        ranges = {"tau_e": m.lag_tau_s, "tau_w": m.warmup_tau_s, "width": (min(m.widths_c), max(m.widths_c)), "tau_r": m.rate_tau_s}
-        without = {"tau_e": {"tau_e": 0.0}, "tau_w": {"tau_w": 0.0}, "width": {"width": 0.0}, "tau_r": {"rate_form": 0, "tau_r": 0.0}}
+        ranges = {"tau_e": m.lag_tau_s, "tau_w": m.warmup_tau_s, "width": (min(m.widths_c), max(m.widths_c)), "tau_r": m.rate_tau_s,
+                  "tau_e2": m.lag_tau_s, "tau_w2": m.warmup_tau_s}
+        without = {"tau_e": {"tau_e": 0.0, "tau_e2": 0.0}, "tau_w": {"tau_w": 0.0, "tau_w2": 0.0}, "width": {"width": 0.0},
+                   "tau_r": {"rate_form": 0, "tau_r": 0.0}, "tau_e2": {"tau_e2": 0.0}, "tau_w2": {"tau_w2": 0.0}}
         for _ in range(2):
             for key, factor in spacing.items():
                 value = getattr(spec, key)
@@ -334,12 +346,21 @@ class Search:
         return beta, names, self.noise
 
 
+def _pairs(first: str, second: str, grid: np.ndarray) -> list:
+    """Both time constants anew, the second the longer, on every other point of `grid`: a second time constant
+    beside the first one held where one alone fitted best would settle at a local optimum (a mixture of the two)."""
+    coarse = grid[::2]
+    return [{first: float(a), second: float(b)} for i, a in enumerate(coarse) for b in coarse[i + 1 :]]
+
+
 def _params(spec: Spec, term: str) -> dict:
     return {
         "thermal_lag": {"tau_s": spec.tau_e},
         "temp_rate": {"heating_cooling_apart": spec.rate_form == 2, "filter_tau_s": spec.tau_r},
-        "hysteresis": {"width_c": spec.width},
+        "hysteresis": {"width_c": spec.width, "operator": "relay" if spec.relay else "play"},
         "warmup": {"tau_s": spec.tau_w},
+        "second_lag": {"tau_s": spec.tau_e2},
+        "second_warmup": {"tau_s": spec.tau_w2},
     }[term]
 
 

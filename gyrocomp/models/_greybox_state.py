@@ -14,41 +14,57 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["TERMS", "Spec", "kernel", "columns_of"]
+__all__ = ["TERMS", "SECOND_OF", "Spec", "kernel", "columns_of"]
 
-TERMS = ("thermal_lag", "temp_rate", "hysteresis", "warmup")
-"""The model's optional terms, by their vocabulary names, in the order they are judged."""
+TERMS = ("thermal_lag", "temp_rate", "hysteresis", "warmup", "second_lag", "second_warmup")
+"""The model's optional terms, in the order they are judged: the vocabulary's names, then a second time constant
+of the element lag and of the warm-up, each tried only once the first is in."""
+
+SECOND_OF = {"second_lag": "thermal_lag", "second_warmup": "warmup"}
+"""Each second time constant and the term it joins: it is tried only once that term is in."""
 
 
 @dataclasses.dataclass(frozen=True)
 class Spec:
-    """Nonlinear parameters of a model: 0 or None means the term is absent."""
+    """Nonlinear parameters of a model: 0 means the term is absent."""
 
     tau_e: float = 0.0
     rate_form: int = 0  # 0 none, 1 one sensitivity, 2 heating and cooling apart
     width: float = 0.0
     tau_w: float = 0.0
     tau_r: float = 0.0  # the dT/dt filter's time constant, with rate_form
+    relay: bool = False  # the hysteresis is a direction relay, not a play (with width)
+    tau_e2: float = 0.0  # a second element time constant (with tau_e)
+    tau_w2: float = 0.0  # a second warm-up time constant (with tau_w)
 
     def terms(self) -> list[str]:
-        present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0)
+        present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0, self.tau_e2 > 0, self.tau_w2 > 0)
         return [t for t, on in zip(TERMS, present) if on]
 
     def n_nonlinear(self) -> int:
-        return int(self.tau_e > 0) + int(self.width > 0) + int(self.tau_w > 0) + int(self.rate_form > 0)
+        """Nonlinear parameters fitted: each time constant and width (the relay/play choice counts as none)."""
+        return len(self.terms())
 
 
 def kernel(time_s, temperature_c, state, spec: Spec) -> np.ndarray:
-    """(T_e, dT/dt, play) of each sample; without a dT/dt term the filter runs at 1 s and its output is unused."""
+    """(T_e, dT/dt, hysteresis output, second T_e) of each sample; without a dT/dt term the filter runs at 1 s, unused."""
     from gyrocomp.effects._stateful import advance
 
-    out = np.empty((time_s.size, 3))
-    advance(time_s, temperature_c, state, float(spec.tau_e), float(spec.tau_r or 1.0), 0.5 * float(spec.width), out)
+    out = np.empty((time_s.size, 4))
+    advance(time_s, temperature_c, state, float(spec.tau_e), float(spec.tau_r or 1.0), 0.5 * float(spec.width), bool(spec.relay),
+            float(spec.tau_e2), out)
     return out
 
 
 def columns_of(raw, time_s, spec: Spec, power_on_s, centre, half, degree) -> dict:
-    """The model's design columns of a spec from the kernel's (T_e, dT/dt, play) (no offsets)."""
+    """The model's design columns of a spec from the kernel's output (no offsets).
+
+    ``z1..z3`` (powers of the scaled element temperature), ``rate`` and
+    ``rate_abs`` (dT/dt; heating and cooling apart), ``play`` or ``relay``
+    (the hysteresis operator's output), ``warmup`` and ``warmup2``
+    (``exp(-t_on / tau)``) and ``lag2`` (the second element temperature
+    less the first, scaled as z: the second path's share of the drift).
+    """
     z = (raw[:, 0] - centre) / half
     columns = {f"z{k}": z**k for k in range(1, degree + 1)}
     if spec.rate_form:
@@ -56,7 +72,11 @@ def columns_of(raw, time_s, spec: Spec, power_on_s, centre, half, degree) -> dic
         if spec.rate_form == 2:
             columns["rate_abs"] = np.abs(raw[:, 1])
     if spec.width:
-        columns["play"] = raw[:, 2]
+        columns["relay" if spec.relay else "play"] = raw[:, 2]
     if spec.tau_w:
         columns["warmup"] = np.exp(-(time_s - power_on_s) / spec.tau_w)
+    if spec.tau_w and spec.tau_w2:
+        columns["warmup2"] = np.exp(-(time_s - power_on_s) / spec.tau_w2)
+    if spec.tau_e and spec.tau_e2:
+        columns["lag2"] = (raw[:, 3] - raw[:, 0]) / half
     return columns

@@ -57,12 +57,11 @@ import math
 import numpy as np
 
 from gyrocomp.errors import InputError
-from gyrocomp.models._greybox_search import Prepared, Search
-from gyrocomp.models._greybox_state import TERMS, Spec, columns_of, kernel
+from gyrocomp.models._greybox_state import SECOND_OF, TERMS, Spec, kernel
 
 __all__ = ["GreyBoxDrift", "GreyBoxStream", "TrainingRun", "TERMS"]
 
-VERSION = 1
+VERSION = 2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -211,6 +210,9 @@ class GreyBoxDrift:
             lo, hi = getattr(self, name)
             if not 0 < lo <= hi < math.inf:
                 raise InputError(f"{owner}: {name} = {getattr(self, name)!r} must be (low, high) with 0 < low <= high")
+        lone = [f"{second} needs {first}" for second, first in SECOND_OF.items() if second in self.terms and first not in self.terms]
+        if lone:
+            raise InputError(f"{owner}: terms {list(self.terms)}: {'; '.join(lone)} among the terms")
         if self.selection not in ("bic", "all"):
             raise InputError(f"{owner}: selection = {self.selection!r}; choose bic or all")
         if not all(0 < w < math.inf for w in self.widths_c):
@@ -239,12 +241,15 @@ class GreyBoxDrift:
         self.centre_c_, self.half_range_c_ = 0.5 * (lo + hi), max(0.5 * (hi - lo), 1e-3)
         from threadpoolctl import threadpool_limits
 
+        from gyrocomp.models._greybox_search import Prepared, Search  # scipy's optimisers: only a fit needs them
+
         prepared = [Prepared.of(run, self) for run in runs]
         with threadpool_limits(limits=1, user_api="blas"):  # small factorisations: threads only contend
             search = Search(self, prepared)
             spec, self.selection_, self.not_fitted_ = search.run()
             beta, names, noise = search.final(spec)
-        self.spec_ = {"tau_e_s": spec.tau_e, "rate_form": spec.rate_form, "width_c": spec.width, "tau_w_s": spec.tau_w, "rate_tau_s": spec.tau_r}
+        self.spec_ = {"tau_e_s": spec.tau_e, "rate_form": spec.rate_form, "width_c": spec.width, "tau_w_s": spec.tau_w, "rate_tau_s": spec.tau_r,
+                      "hysteresis_operator": "relay" if spec.relay else "play", "tau_e2_s": spec.tau_e2, "tau_w2_s": spec.tau_w2}
         n_runs = len(prepared)
         self.run_offsets_ = [float(b) for b in beta[:n_runs]]
         weights = np.array([p.duration_s for p in prepared])
@@ -338,27 +343,44 @@ class GreyBoxDrift:
         return model
 
     def _check_loaded(self, name: str) -> None:
-        numbers = [self.offset_, self.centre_c_, self.half_range_c_, *self.coef_.values(), *self.spec_.values(),
+        self.spec_ = {**_V1_SPEC, **self.spec_}  # a version-1 file: a play, no second time constants
+        numbers = [self.offset_, self.centre_c_, self.half_range_c_, *self.coef_.values(),
+                   *(v for k, v in self.spec_.items() if k != "hysteresis_operator"),
                    *self.temperature_range_c_, *self.rate_range_c_per_s_]
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in numbers):
             raise InputError(f"{name}: greybox model holds a non-finite or non-numeric parameter")
-        known = {f"z{k}" for k in range(1, self.degree + 1)} | {"rate", "rate_abs", "play", "warmup"}
+        known = {f"z{k}" for k in range(1, self.degree + 1)} | {"rate", "rate_abs", "play", "relay", "warmup", "warmup2", "lag2"}
         bad = sorted(set(self.coef_) - known)
         if bad:
             raise InputError(f"{name}: greybox coefficient(s) {', '.join(bad)} unknown; known: {', '.join(sorted(known))}")
         spec = self.spec_
-        if set(spec) != {"tau_e_s", "rate_form", "width_c", "tau_w_s", "rate_tau_s"}:
-            raise InputError(f"{name}: greybox spec_ keys {sorted(spec)}; expected tau_e_s, rate_form, width_c, tau_w_s, rate_tau_s")
-        if (self.half_range_c_ <= 0 or any(v < 0 for v in spec.values()) or spec["rate_form"] not in (0, 1, 2)
-                or (spec["rate_form"] and not spec["rate_tau_s"] > 0)):
+        if set(spec) != set(_V1_SPEC) | {"tau_e_s", "rate_form", "width_c", "tau_w_s", "rate_tau_s"}:
+            raise InputError(f"{name}: greybox spec_ keys {sorted(spec)}; expected tau_e_s, rate_form, width_c, tau_w_s, rate_tau_s, "
+                             f"{', '.join(_V1_SPEC)}")
+        numbers = {k: v for k, v in spec.items() if k != "hysteresis_operator"}
+        if (self.half_range_c_ <= 0 or any(v < 0 for v in numbers.values()) or spec["rate_form"] not in (0, 1, 2)
+                or (spec["rate_form"] and not spec["rate_tau_s"] > 0) or spec["hysteresis_operator"] not in ("play", "relay")):
             raise InputError(f"{name}: greybox spec {self.spec_} out of range")
+
+    def spec(self) -> Spec:
+        """The fitted nonlinear specification (:class:`~gyrocomp.models._greybox_state.Spec`)."""
+        s = self.spec_
+        return Spec(s["tau_e_s"], s["rate_form"], s["width_c"], s["tau_w_s"], s["rate_tau_s"], s["hysteresis_operator"] == "relay",
+                    s["tau_e2_s"], s["tau_w2_s"])
+
+
+_V1_SPEC = {"hysteresis_operator": "play", "tau_e2_s": 0.0, "tau_w2_s": 0.0}
+"""The spec entries version 2 added, at the values a version-1 model holds."""
 
 
 class GreyBoxStream:
     """Causal compensation state of a :class:`GreyBoxDrift`: call on consecutive chunks of (time, temperature).
 
-    The state is the kernel's six floats (:mod:`gyrocomp.effects._stateful`)
-    and the power-on time; each call returns the chunk's modelled bias [deg/s].
+    The state is the kernel's few floats (:mod:`gyrocomp.effects._stateful`)
+    and the power-on time; each call returns the chunk's modelled bias [deg/s]:
+    the columns of :func:`~gyrocomp.models._greybox_state.columns_of` times
+    their coefficients, summed in one compiled pass
+    (:func:`~gyrocomp.effects._stateful.evaluate`; the cubic by Horner's rule).
     """
 
     def __init__(self, model: GreyBoxDrift, power_on_s: float | None, clamp: bool):
@@ -368,6 +390,10 @@ class GreyBoxStream:
         self.power_on_s = power_on_s
         self.clamp = clamp
         self.state = new_state()
+        c = model.coef_
+        hysteresis = c.get("relay" if model.spec_["hysteresis_operator"] == "relay" else "play", 0.0)
+        self.coef = np.array([model.offset_, *(c.get(f"z{k}", 0.0) for k in (1, 2, 3)), c.get("rate", 0.0), c.get("rate_abs", 0.0),
+                              hysteresis, c.get("lag2", 0.0), c.get("warmup", 0.0), c.get("warmup2", 0.0)])
 
     def restart_if_not_bridged(self) -> None:
         """Before a segment after a gap: a cold element, filter and play unless the model bridges gaps."""
@@ -379,13 +405,11 @@ class GreyBoxStream:
         temperature_c = np.ascontiguousarray(temperature_c, dtype=float)
         if self.power_on_s is None and time_s.size:
             self.power_on_s = float(time_s[0])
+        from gyrocomp.effects._stateful import evaluate
+
         m = self.model
-        spec = Spec(m.spec_["tau_e_s"], m.spec_["rate_form"], m.spec_["width_c"], m.spec_["tau_w_s"], m.spec_["rate_tau_s"])
-        raw = kernel(time_s, temperature_c, self.state, spec)
-        if self.clamp:  # the cubic is held at the edge of its range, as firmware holds TMIN..TMAX; dT/dt is linear and extrapolates
-            np.clip(raw[:, 0], *m.temperature_range_c_, out=raw[:, 0])
-        columns = columns_of(raw, time_s, spec, self.power_on_s, m.centre_c_, m.half_range_c_, m.degree)
-        out = np.full(time_s.size, m.offset_)
-        for name, column in columns.items():
-            out += m.coef_.get(name, 0.0) * column
+        raw = kernel(time_s, temperature_c, self.state, m.spec())
+        lo, hi = m.temperature_range_c_ if self.clamp else (-math.inf, math.inf)
+        out = np.empty(time_s.size)
+        evaluate(raw, time_s, self.coef, m.centre_c_, m.half_range_c_, lo, hi, self.power_on_s, m.spec_["tau_w_s"], m.spec_["tau_w2_s"], out)
         return out
