@@ -47,7 +47,41 @@ class NotFittedError(GyrocompError, ValueError, AttributeError):
     """
 
 
-class Learner(abc.ABC):
+class Params:
+    """The scikit-learn parameter contract: the ``__init__`` arguments are the parameters, stored as given.
+
+    :meth:`get_params`, :meth:`set_params` (an unknown name is an
+    :class:`~gyrocomp.errors.InputError`) and a ``repr`` of them; shared by
+    :class:`Learner` and estimators that are no learner of independent rows
+    (:class:`gyrocomp.models.greybox.GreyBoxDrift`).
+    """
+
+    @classmethod
+    def _param_names(cls) -> list[str]:
+        signature = inspect.signature(cls.__init__)
+        return [name for name in signature.parameters if name != "self"]
+
+    def get_params(self, deep: bool = True) -> dict[str, Any]:
+        """The ``__init__`` arguments as stored (``deep`` is accepted for scikit-learn)."""
+        return {name: getattr(self, name) for name in self._param_names()}
+
+    def set_params(self, **params: Any) -> "Params":
+        """Set ``__init__`` arguments; an unknown name raises ``ValueError``."""
+        names = self._param_names()
+        for name, value in params.items():
+            if name not in names:
+                raise InputError(
+                    f"{type(self).__name__}: unknown parameter {name!r}; known: {', '.join(names)}"
+                )
+            setattr(self, name, value)
+        return self
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self.get_params().items())
+        return f"{type(self).__name__}({args})"
+
+
+class Learner(Params, abc.ABC):
     """Base of the learners: parameters, fitted state and the JSON round trip.
 
     Subclasses set ``kind`` (the ``"kind"`` key of :meth:`to_dict`),
@@ -65,30 +99,6 @@ class Learner(abc.ABC):
     _may_be_empty: frozenset[str] = frozenset()
 
     # --- parameters -------------------------------------------------------
-    @classmethod
-    def _param_names(cls) -> list[str]:
-        signature = inspect.signature(cls.__init__)
-        return [name for name in signature.parameters if name != "self"]
-
-    def get_params(self, deep: bool = True) -> dict[str, Any]:
-        """The ``__init__`` arguments as stored (``deep`` is accepted for scikit-learn)."""
-        return {name: getattr(self, name) for name in self._param_names()}
-
-    def set_params(self, **params: Any) -> "Learner":
-        """Set ``__init__`` arguments; an unknown name raises ``ValueError``."""
-        names = self._param_names()
-        for name, value in params.items():
-            if name not in names:
-                raise InputError(
-                    f"{type(self).__name__}: unknown parameter {name!r}; known: {', '.join(names)}"
-                )
-            setattr(self, name, value)
-        return self
-
-    def __repr__(self) -> str:
-        args = ", ".join(f"{k}={v!r}" for k, v in self.get_params().items())
-        return f"{type(self).__name__}({args})"
-
     # --- fitted state -----------------------------------------------------
     def _is_fitted(self) -> bool:
         return all(hasattr(self, name) for name in self._fitted)

@@ -57,6 +57,7 @@ import math
 import numpy as np
 
 from gyrocomp.errors import InputError
+from gyrocomp.models._base import NotFittedError, Params
 from gyrocomp.models._greybox_state import SECOND_OF, TERMS, Spec, kernel
 
 __all__ = ["GreyBoxDrift", "GreyBoxStream", "TrainingRun", "TERMS"]
@@ -87,7 +88,7 @@ class TrainingRun:
     name: str = "run"
 
 
-class GreyBoxDrift:
+class GreyBoxDrift(Params):
     """Causal grey-box drift model, fitted by the diagnosis' criterion on several runs.
 
     Parameters
@@ -177,23 +178,6 @@ class GreyBoxDrift:
         self.min_unique_variance = min_unique_variance
         self.bridge_gaps = bridge_gaps
         self.selection = selection
-
-    # --- contract -----------------------------------------------------------
-    @classmethod
-    def _param_names(cls) -> list[str]:
-        import inspect
-
-        return [p for p in inspect.signature(cls.__init__).parameters if p != "self"]
-
-    def get_params(self, deep: bool = True) -> dict:
-        return {name: getattr(self, name) for name in self._param_names()}
-
-    def set_params(self, **params) -> "GreyBoxDrift":
-        for name, value in params.items():
-            if name not in self._param_names():
-                raise InputError(f"GreyBoxDrift: unknown parameter {name!r}; known: {', '.join(self._param_names())}")
-            setattr(self, name, value)
-        return self
 
     def _check_params(self) -> None:
         owner = "GreyBoxDrift"
@@ -308,8 +292,6 @@ class GreyBoxDrift:
 
     def _check_fitted(self) -> None:
         if not hasattr(self, "coef_"):
-            from gyrocomp.models._base import NotFittedError
-
             raise NotFittedError("this GreyBoxDrift is not fitted yet; call fit(runs) first")
 
     # --- JSON -----------------------------------------------------------------
