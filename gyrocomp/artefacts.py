@@ -296,6 +296,23 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
         raise
 
 
+def sidecar_path(table: str | os.PathLike) -> Path:
+    """The JSON sidecar of a table: ``run1.parquet`` (``.csv``, ``.csv.gz``, ...) -> ``run1.meta.json``.
+
+    ``.meta.json`` is a name no ``model.json`` of ``train --out run1.json``
+    takes, so ``compensate ... run1.json --out run1.parquet`` keeps the
+    model (the sidecar used to be ``run1.json``; an output naming an input
+    is still refused, :func:`gyrocomp.commands.guarded`).
+    """
+    from gyrocomp.compressed import is_compressed
+
+    path = Path(table)
+    stem = path.stem if is_compressed(path.name) else path.name
+    if Path(stem).suffix.lower() in (".parquet", ".pq", ".csv", ".txt"):
+        stem = Path(stem).stem
+    return path.with_name(f"{stem}.meta.json")
+
+
 def _output_kind(path: str | os.PathLike, target: Path) -> str:
     """``"file"`` (a regular file or a new path) or ``"stream"`` (a character device or FIFO) for an output `path` resolving to `target`."""
     try:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -49,3 +50,24 @@ def test_compensate_writes_compressed_csv_chunk_by_chunk(tmp_path, ext):
     pd.testing.assert_frame_equal(pd.read_csv(packed), pd.read_csv(outs["plain.csv"]))
     if ext == "gz":
         assert packed.read_bytes() == outs[f"again.csv.{ext}"].read_bytes()
+
+
+def test_a_sidecar_takes_no_model_name(tmp_path):
+    """Issue 35 item 9: train --out run1.json, then compensate run1.json --out run1.parquet writes run1.meta.json; an output naming an input is still refused."""
+    if not (SAMPLE / "oven_train.parquet").exists():
+        pytest.skip("sample_data absent")
+    assert artefacts.sidecar_path("a/run1.parquet").as_posix() == "a/run1.meta.json"
+    assert artefacts.sidecar_path("run1.csv.gz").name == "run1.meta.json"
+    assert artefacts.sidecar_path("run.v2.csv").name == "run.v2.meta.json"
+    runner = CliRunner()
+    model = tmp_path / "run1.json"
+    assert runner.invoke(app, ["train", str(SAMPLE / "oven_train.parquet"), "--config", "polynomial", "--out", str(model)]).exit_code == 0
+    before = model.read_bytes()
+    result = runner.invoke(app, ["compensate", str(SAMPLE / "oven_test.parquet"), str(model), "--out", str(tmp_path / "run1.parquet")])
+    assert result.exit_code == 0, result.stderr
+    assert model.read_bytes() == before
+    assert json.loads((tmp_path / "run1.meta.json").read_text())["schema"]["name"] == "gyrocomp.compensation"
+    result = runner.invoke(app, ["compensate", str(SAMPLE / "oven_test.parquet"), str(model), "--out", str(tmp_path / "run1.meta.parquet")])
+    assert result.exit_code == 0, result.stderr  # its sidecar run1.meta.meta.json
+    result = runner.invoke(app, ["compensate", str(SAMPLE / "oven_test.parquet"), str(tmp_path / "run1.meta.json"), "--out", str(tmp_path / "run1.parquet")])
+    assert result.exit_code == 2 and "would overwrite the input" in result.stderr

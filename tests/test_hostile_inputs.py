@@ -45,6 +45,7 @@ def _setup(folder: Path) -> None:
     _recording(folder / "h.parquet")
     _recording(folder / "real.csv")
     (folder / "model.json").write_text('{"schema": {"name": "gyrocomp.model"}}\n')
+    (folder / "model.meta.json").write_text('{"schema": {"name": "gyrocomp.model"}}\n')  # a model named as a sidecar
     (folder / "out").mkdir()
     _recording(folder / "out" / "train.parquet")
     os.symlink("x.parquet", folder / "link.parquet")
@@ -58,7 +59,7 @@ CASES = [
     ("allan-onto-hard-linked-input", ["allan", "hard.parquet", "--out", "x.parquet"], 2, r"overwrite the input hard\.parquet"),
     ("allan-plot-onto-input", ["allan", "x.parquet", "--out", "a.json", "--plot", "x.parquet"], 2, r"overwrite the input x\.parquet"),
     ("allan-plot-equals-out", ["allan", "x.parquet", "--out", "a.json", "--plot", "a.json"], 2, r"a\.json: named as two outputs"),
-    ("compensate-sidecar-onto-model", ["compensate", "x.parquet", "model.json", "--out", "model.parquet"], 2, r"model\.json: the output would overwrite the input model\.json"),
+    ("compensate-sidecar-onto-model", ["compensate", "x.parquet", "model.meta.json", "--out", "model.parquet"], 2, r"model\.meta\.json: the output would overwrite the input model\.meta\.json"),
     ("compensate-onto-recording", ["compensate", "x.parquet", "model.json", "--out", "x.parquet"], 2, r"overwrite the input x\.parquet"),
     ("decompose-onto-input", ["decompose", "x.parquet", "--out", "x.parquet"], 2, r"overwrite the input x\.parquet"),
     ("classify-onto-input", ["classify", "x.parquet", "--out", "x.parquet"], 2, r"overwrite the input x\.parquet"),
@@ -717,18 +718,18 @@ def test_batch_summary_csv_defuses_formulas(tmp_path):
 
 
 def test_compensate_stream_outputs_never_overwrite_the_model(tmp_path, monkeypatch, trained_model):
-    """N13: with several streams of a flight log, ``<out>_<stream>.json`` is checked like every output: it may not be the model."""
+    """N13: with several streams of a flight log, ``<out>_<stream>.meta.json`` is checked like every output: it may not be the model."""
     from gyrocomp import recordings
     from gyrocomp.commands import compensate as stage
 
     frame = _frame(np.arange(600.0))
     streams = [recordings.recording_from_frame(frame, name="two.ulg", metadata={"stream": key}) for key in ("s0", "s1")]
     monkeypatch.setattr(recordings, "read_recordings", lambda *args, **kwargs: streams)
-    model = tmp_path / "c_s1.json"
+    model = tmp_path / "c_s1.meta.json"
     model.write_bytes(trained_model.read_bytes())
     (tmp_path / "two.ulg").write_bytes(b"")
     before = _snapshot(tmp_path)
-    with pytest.raises(InputError, match=r"c_s1\.json: the output would overwrite the input .*c_s1\.json"):
+    with pytest.raises(InputError, match=r"c_s1\.meta\.json: the output would overwrite the input .*c_s1\.meta\.json"):
         stage.to_files([tmp_path / "two.ulg", model], tmp_path / "c.parquet")
     assert _snapshot(tmp_path) == before
     with pytest.raises(InputError, match=r"stream 'a/b' cannot name a file or folder"):

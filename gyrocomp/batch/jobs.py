@@ -25,7 +25,7 @@ Files per output folder
 ``allan``
     ``allan.json``, ``allan.png`` (as ``gyrocomp allan REC --plot``).
 ``compensate``
-    ``compensated.parquet``, ``compensated.json`` (as ``gyrocomp compensate``).
+    ``compensated.parquet``, ``compensated.meta.json`` (as ``gyrocomp compensate``).
 ``run``
     ``report.json``, ``report.md``, ``report.png`` and one folder per
     method (as ``gyrocomp run``). The report records stage times, so its

@@ -32,7 +32,7 @@ def compensate(
     recording: Annotated[Path, typer.Argument(help="Recording (CSV or Parquet) with time, rate and temperature.")],
     model: Annotated[Path, typer.Argument(help="model.json from `gyrocomp train`.")],
     mode: Annotated[str, typer.Option("--mode", help="causal: rate - f(T, dT/dt) only, what firmware runs (keeps a true angular rate); full: the paper's offline decompose + denoise + compensate.")] = "causal",
-    out: Annotated[Path, typer.Option("--out", "-o", help="compensated.parquet (or .csv; - for CSV on stdout); compensation.json goes beside it (same stem).")] = ...,
+    out: Annotated[Path, typer.Option("--out", "-o", help="compensated.parquet (or .csv, .csv.gz, ...; - for CSV on stdout); its sidecar compensated.meta.json goes beside it.")] = ...,
     clamp: Annotated[Optional[bool], typer.Option("--clamp/--no-clamp", help="Clamp temperature and dT/dt to the training ranges, as firmware does (default in causal mode; in full mode the model's clip_inputs). --no-clamp extrapolates.", show_default=False)] = None,
     seed: Annotated[Optional[int], typer.Option("--seed", help="Seed of the decomposition in full mode (default: the training run's).")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Processes for the decomposition in full mode.")] = 1,

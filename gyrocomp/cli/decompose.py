@@ -29,7 +29,7 @@ from gyrocomp.cli._app import (
 def decompose(
     ctx: typer.Context,
     recording: Annotated[Path, typer.Argument(help="Recording to decompose: CSV or Parquet with time and rate (temperature kept when present).")],
-    out: Annotated[Path, typer.Option("--out", help="components.parquet to write; the components.json sidecar goes beside it.")],
+    out: Annotated[Path, typer.Option("--out", help="components.parquet to write; the components.meta.json sidecar goes beside it.")],
     method: Annotated[Optional[str], typer.Option("--method", help="lcd, iceemdan, ceemdan or emd (default: the config's, else lcd).")] = None,
     ensemble: Annotated[Optional[int], typer.Option("--ensemble", help="Noise realisations of iceemdan/ceemdan (default: the config's, else 100).")] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the noise ensemble.")] = 0,
@@ -51,7 +51,7 @@ def decompose(
     """Decompose `rate` into components, fastest first, the residue or trend last.
 
     Writes components.parquet (time, rate, temperature when present, one
-    column per component) and components.json (per component: energy share,
+    column per component) and components.meta.json (per component: energy share,
     mean frequency, orthogonality index; and the reconstruction error).
     Several axes (--rate-col gx,gy,gz) go into one file: each axis under its
     own name and its components prefixed by it (gx_isc1 ... gx_trend), every

@@ -1,4 +1,4 @@
-"""``compensate``: a recording and a ``model.json`` to ``compensated.parquet`` and its ``compensated.json`` sidecar."""
+"""``compensate``: a recording and a ``model.json`` to ``compensated.parquet`` and its ``compensated.meta.json`` sidecar."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
+from gyrocomp.artefacts import sidecar_path
 from gyrocomp.commands import guarded
 from gyrocomp.config import check_seed
 from gyrocomp.recordings import ColumnSpec
@@ -49,7 +50,7 @@ class Options:
 
 def written(out, options) -> list:
     """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
-    return ([out] if str(out) == "-" else [out, Path(out).with_suffix(".json")]) + [options.plot]
+    return ([out] if str(out) == "-" else [out, sidecar_path(out)]) + [options.plot]
 
 
 @guarded(written)
@@ -108,7 +109,7 @@ def to_files(
         outputs = []
         for rec in streams:
             table = stream_path(out, rec.metadata["stream"])
-            outputs += [table, table.with_suffix(".json"), None if options.plot is None else stream_path(options.plot, rec.metadata["stream"])]
+            outputs += [table, artefacts.sidecar_path(table), None if options.plot is None else stream_path(options.plot, rec.metadata["stream"])]
         check_paths(inputs, options, outputs)
     groups, summaries = [], {}
     with warnings.catch_warnings(record=True) as caught:
@@ -193,7 +194,7 @@ def stream_to_files(
     recording longer than the rate window, the sample rate being the first
     chunk's. A gap raises :class:`gyrocomp.streaming.GapError` (a file with
     gaps goes to :func:`to_files`, which compensates it by segments).
-    ``compensated.json`` goes beside a file `out`, with the figures of
+    ``compensated.meta.json`` goes beside a file `out`, with the figures of
     :func:`write` merged chunk by chunk.
 
     Returns
@@ -251,7 +252,7 @@ def stream_to_files(
             summary = {**streams[name].summary(), "model_axis": _model_axis(models, model), "unit": chunk.axis(name).axes[0].unit}
             summaries[name] = {**summary, "figures": {"n_samples": chunks.n_samples, "n_segments": 1, "fs_hz": float(chunks.fs_hz), **figures[name].figures()}}
     if str(out) != "-":
-        artefacts.write_json(Path(out).with_suffix(".json"), {**header(), "mode": "causal", "axes": summaries})
+        artefacts.write_json(artefacts.sidecar_path(out), {**header(), "mode": "causal", "axes": summaries})
     if means:
         axes = [plots.drift_axis_from_means(name, [kept.means()], pairs[name]) for name, kept in means.items()]
         plots.save(plots.drift_figure(axes, title=f"{chunks.name} compensated (causal)"), options.plot)
@@ -334,7 +335,7 @@ def output_name(axis: str, what: str) -> str:
 
 
 def write(path: Path, frame, summaries: dict, recording, model_path: Path, mode: str, seed) -> dict:
-    """Write ``compensated.parquet`` and its ``compensated.json`` sidecar (same stem).
+    """Write ``compensated.parquet`` and its ``compensated.meta.json`` sidecar (same stem).
 
     The sidecar holds the header (inputs: the recording and the model
     file), ``mode``, and per axis (``axes``) the summary of
@@ -366,7 +367,7 @@ def write(path: Path, frame, summaries: dict, recording, model_path: Path, mode:
         }
         axes[name] = {**summary, "figures": figures}
     sidecar = {**header, "mode": mode, "axes": axes}
-    artefacts.write_json(path.with_suffix(".json"), sidecar)
+    artefacts.write_json(artefacts.sidecar_path(path), sidecar)
     return sidecar
 
 

@@ -1,4 +1,4 @@
-"""``decompose``: a recording to ``components.parquet`` and its ``components.json`` sidecar."""
+"""``decompose``: a recording to ``components.parquet`` and its ``components.meta.json`` sidecar."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
+from gyrocomp.artefacts import sidecar_path
 from gyrocomp.commands import guarded
 from gyrocomp.config import check_seed
 from gyrocomp.recordings import ColumnSpec
@@ -70,7 +71,7 @@ class Options:
 
 def written(out, options) -> list:
     """The paths :func:`to_files` writes (checked against its inputs by :func:`~gyrocomp.commands.guarded`)."""
-    return ([out] if str(out) == "-" else [out, Path(out).with_suffix(".json")]) + [options.plot]
+    return ([out] if str(out) == "-" else [out, sidecar_path(out)]) + [options.plot]
 
 
 @guarded(written)
@@ -85,7 +86,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     -------
     decomposition : gyrocomp.decompose.Decomposition, or dict of str to it (several axes)
     sidecar : dict
-        The ``components.json`` object written.
+        The ``components.meta.json`` object written.
     """
     from gyrocomp import recordings
 
@@ -106,7 +107,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
 
 
 def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers: int = 1, progress: Callable[[int, int], None] | None = None):
-    """Decompose a recording's rate and write ``components.parquet`` with its ``components.json`` sidecar.
+    """Decompose a recording's rate and write ``components.parquet`` with its ``components.meta.json`` sidecar.
 
     The sequence ``gyrocomp decompose`` and the parallel pipelines
     (:func:`gyrocomp.commands.run.decompose_and_classify`) share.
@@ -141,7 +142,7 @@ def write(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers
     sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=header["inputs"], settings=header["settings"], seed=seed)
     sidecar.update(method=settings.method, fs_hz=recording.fs_hz, **component_stats(result, recording.fs_hz))
     artefacts.write_table(out, frame, header)
-    artefacts.write_json(Path(out).with_suffix(".json"), sidecar)
+    artefacts.write_json(artefacts.sidecar_path(out), sidecar)
     return result, sidecar
 
 
@@ -223,7 +224,7 @@ def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, wo
     sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=header["inputs"], settings=header["settings"], seed=seed)
     sidecar.update(method=settings.method, fs_hz=recording.fs_hz, axes=stats)
     artefacts.write_table(out, columns, header)
-    artefacts.write_json(Path(out).with_suffix(".json"), sidecar)
+    artefacts.write_json(artefacts.sidecar_path(out), sidecar)
     return results, sidecar
 
 

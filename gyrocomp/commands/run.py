@@ -218,7 +218,7 @@ def _run_axis(run_settings, eval_settings, train_rec, test_rec, signal_rec, part
 def decompose_and_classify(recording: recordings.Recording, config: dict, source: str, folder: Path, *, seed: int, workers: int, callback=None) -> tuple[dict, dict]:
     """Decompose a recording and classify its components as ``gyrocomp decompose`` and ``classify`` do.
 
-    Writes ``components.parquet`` (+ the ``components.json`` sidecar,
+    Writes ``components.parquet`` (+ the ``components.meta.json`` sidecar,
     :func:`gyrocomp.commands.decompose.write`) and ``classes.json``
     (:func:`gyrocomp.commands.classify.write`) into `folder`.
 

@@ -1,4 +1,4 @@
-"""Statistics of a decomposition for the ``components.json`` sidecar."""
+"""Statistics of a decomposition for the ``components.meta.json`` sidecar."""
 
 from __future__ import annotations
 

@@ -148,7 +148,7 @@ def test_compensate_needs_a_model_and_applies_it(logs, tmp_path):
     summary = pd.read_csv(out / "summary.csv")
     assert summary["compensated_drift_std_deg_h"].notna().all()
     assert read_manifest(out / "unit0")["settings"]["options"]["mode"] == "causal"
-    assert sorted(p.name for p in (out / "unit0").iterdir()) == ["compensated.json", "compensated.parquet", MANIFEST]
+    assert sorted(p.name for p in (out / "unit0").iterdir()) == ["compensated.meta.json", "compensated.parquet", MANIFEST]
 
 
 def test_unknown_or_foreign_options_exit_2(logs, tmp_path):

@@ -15,6 +15,7 @@ import pytest
 from numpy.testing import assert_allclose
 from typer.testing import CliRunner
 
+from gyrocomp import artefacts
 from gyrocomp.cli import app
 
 AXES = ("gx", "gy", "gz")
@@ -84,7 +85,7 @@ def test_one_compensate_writes_every_axis_as_the_single_axis_runs_do(log3, tmp_p
     _invoke("compensate", path, tmp_path / "model.json", "--rate-col", "gx,gy,gz", "--temp-col", "temp", "--out", out)
     frame = pd.read_parquet(out)
     assert [f"{axis}_compensated" for axis in AXES] == [c for c in frame.columns if c.endswith("_compensated")]
-    sidecar = json.loads(out.with_suffix(".json").read_text())
+    sidecar = json.loads(artefacts.sidecar_path(out).read_text())
     assert list(sidecar["axes"]) == list(AXES)
     for axis in AXES:
         _train(path, tmp_path / f"{axis}_model.json", axis)
@@ -153,7 +154,7 @@ def test_accelerometer_axes_keep_their_unit(tmp_path):
     _invoke("compensate", path, tmp_path / "m.json", "--rate-col", "ax", "--rate-unit", "g", "--out", out)
     frame = pd.read_parquet(out)
     assert_allclose(frame["ax"], ax_g * 9.80665, rtol=1e-12)  # standard gravity, CGPM 1901
-    assert json.loads(out.with_suffix(".json").read_text())["axes"]["ax"]["unit"] == "m/s^2"
+    assert json.loads(artefacts.sidecar_path(out).read_text())["axes"]["ax"]["unit"] == "m/s^2"
     assert np.std(frame["ax_compensated"]) < 2e-3 * np.std(frame["ax"]) + 2e-3
     _invoke("allan", path, "--rate-col", "ax", "--rate-unit", "g", "--taus", "1,2,4,8", "--out", tmp_path / "allan.json")
     terms = json.loads((tmp_path / "allan.json").read_text())["series"][0]["terms"]
@@ -256,7 +257,7 @@ def test_decompose_and_classify_several_axes_equal_the_single_axis_runs(log3, tm
     comps = tmp_path / "c.parquet"
     _invoke("decompose", path, "--method", "lcd", "--rate-col", "gx,gy,gz", "--temp-col", "temp", "--out", comps)
     frame = pd.read_parquet(comps)
-    sidecar = json.loads(comps.with_suffix(".json").read_text())
+    sidecar = json.loads(artefacts.sidecar_path(comps).read_text())
     assert list(sidecar["axes"]) == list(AXES)
     _invoke("classify", comps, "--out", tmp_path / "classes.json")
     classes = json.loads((tmp_path / "classes.json").read_text())
@@ -265,7 +266,7 @@ def test_decompose_and_classify_several_axes_equal_the_single_axis_runs(log3, tm
         single = tmp_path / f"{axis}.parquet"
         _invoke("decompose", path, "--method", "lcd", "--rate-col", axis, "--temp-col", "temp", "--out", single)
         alone = pd.read_parquet(single)
-        names = [c["name"] for c in json.loads(single.with_suffix(".json").read_text())["components"]]
+        names = [c["name"] for c in json.loads(artefacts.sidecar_path(single).read_text())["components"]]
         assert [c["name"] for c in sidecar["axes"][axis]["components"]] == [f"{axis}_{n}" for n in names]
         assert_allclose(frame[axis], alone["rate"], rtol=0, atol=0)
         for name in names:
@@ -283,7 +284,7 @@ def test_decompose_several_axes_gives_the_same_bytes_for_any_workers(log3, tmp_p
     for workers in (1, 2):
         _invoke("decompose", path, "--method", "iceemdan", "--ensemble", "4", "--rate-col", "gx,gy", "--temp-col", "temp", "--workers", workers, "--seed", 7, "--out", tmp_path / f"w{workers}.parquet")
     assert pd.read_parquet(tmp_path / "w1.parquet").equals(pd.read_parquet(tmp_path / "w2.parquet"))
-    assert (tmp_path / "w1.json").read_bytes() == (tmp_path / "w2.json").read_bytes()
+    assert (tmp_path / "w1.meta.json").read_bytes() == (tmp_path / "w2.meta.json").read_bytes()
 
 
 def test_batch_passes_the_axes_and_reports_each(log3, tmp_path):

@@ -34,7 +34,7 @@ def test_writes_contract_columns_and_sidecar(tmp_path, recording, method):
     assert header["fs_hz"] == pytest.approx(100.0)
     assert header["seed"] == 3 and header["settings"]["method"] == method
     np.testing.assert_allclose(frame[names].sum(axis=1), frame["rate"], atol=1e-9 * frame["rate"].abs().max())
-    sidecar = read_json(tmp_path / "components.json", "gyrocomp.components-summary")
+    sidecar = read_json(tmp_path / "components.meta.json", "gyrocomp.components-summary")
     assert [c["name"] for c in sidecar["components"]] == names
     assert sidecar["reconstruction_error"] < 1e-9
     assert sum(c["energy_share"] for c in sidecar["components"]) == pytest.approx(1.0)

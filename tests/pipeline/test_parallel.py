@@ -52,7 +52,7 @@ def test_cli_chain_round_trips_and_compensates_a_held_out_run(tmp_path, oven_fil
         _invoke(["compensate", test_path, model, "--mode", mode, "--out", out])
         frame, header = artefacts.read_table(out, "gyrocomp.compensation")
         assert list(frame.columns) == ["time", "rate", "temperature", "drift_model", "compensated"]
-        sidecar = artefacts.read_json(out.with_suffix(".json"), "gyrocomp.compensation")
+        sidecar = artefacts.read_json(artefacts.sidecar_path(out), "gyrocomp.compensation")
         assert sidecar["mode"] == mode and (mode == "causal" or sidecar["axes"]["rate"]["classes"])
         left = evaluate.residual_drift(frame["compensated"], test.fs_hz)["std_deg_h"]
         assert raw / left >= factor, f"{config} {mode}: {raw:.1f} -> {left:.2f} deg/h"
@@ -140,7 +140,7 @@ def test_pipeline_writes_the_cli_artefacts_byte_for_byte(tmp_path, oven_files):
     _invoke(["classify", cli / "components.parquet", "--config", "pe-lcd-anfis", "--out", cli / "classes.json"])
     rec = recordings.read_recording(train_path, require_temperature=True)
     _, paths = decompose_and_classify(rec, load_config("pe-lcd-anfis"), "pe-lcd-anfis", pipe, seed=0, workers=1)
-    for name in ("components.parquet", "components.json", "classes.json"):
+    for name in ("components.parquet", "components.meta.json", "classes.json"):
         assert (pipe / name).read_bytes() == (cli / name).read_bytes(), name
     assert set(paths) == {"components", "classes"}
 

@@ -16,6 +16,7 @@ import pytest
 from numpy.testing import assert_allclose
 from typer.testing import CliRunner
 
+from gyrocomp import artefacts
 from gyrocomp.cli import app
 from gyrocomp.pipeline.compensate import load_models
 
@@ -74,7 +75,7 @@ def test_gapped_recording_trains_and_compensates_as_its_segments_alone(gapped, c
     _invoke("compensate", path, model_path, "--mode", "full", "--out", out)
     frame = pd.read_parquet(out)
     assert_allclose(frame["time"], whole["time"], rtol=0, atol=0)
-    sidecar = json.loads(out.with_suffix(".json").read_text())["axes"]["rate"]
+    sidecar = json.loads(artefacts.sidecar_path(out).read_text())["axes"]["rate"]
     assert len(sidecar["segment_classes"]) == 3 and sidecar["figures"]["n_segments"] == 3
     row = 0
     for k, n in enumerate(sizes):  # each burst in a file of its own: one continuous run, decomposed whole
@@ -109,7 +110,7 @@ def test_a_segment_too_short_to_decompose_is_refused_by_name(gapped, mode, tmp_p
         _invoke("train", path, "--config", "pe-lcd-anfis", *FAST["pe-lcd-anfis"], "--out", model_path)
         out = tmp_path / "c.parquet"
         result = _invoke("compensate", short, model_path, "--mode", "full", "--out", out, code=2)
-        assert not out.exists() and not out.with_suffix(".json").exists()
+        assert not out.exists() and not artefacts.sidecar_path(out).exists()
     assert message in result.output and "short.csv" in result.output
     assert len([line for line in result.output.splitlines() if "note:" not in line]) == 1  # one line beside the gap note
 

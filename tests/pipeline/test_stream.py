@@ -68,7 +68,7 @@ def test_chunks_give_the_bytes_of_the_whole_recording(key, models, test_csv, tmp
             frame, header = artefacts.read_table(streamed, "gyrocomp.compensation")
             pd.testing.assert_frame_equal(frame, pd.read_csv(whole), check_exact=True)
             assert header["inputs"][0]["name"] == "test.csv"
-        sidecar = json.loads(streamed.with_suffix(".json").read_text())
+        sidecar = json.loads(artefacts.sidecar_path(streamed).read_text())
         reference = pd.read_csv(whole)
         assert n_samples == len(reference) == sidecar["axes"]["rate"]["figures"]["n_samples"]
         np.testing.assert_allclose(figures["compensated_std"], np.std(reference["compensated"]), rtol=1e-12)
