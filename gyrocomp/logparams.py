@@ -12,8 +12,8 @@ reads, so every command sees the sensor's own output, and one line
   ``TC_G_ENABLE`` / ``TC_A_ENABLE`` thermal compensation, the ``CAL_*``
   offsets and ``SENS_BOARD_ROT`` (``Gyroscope::Correct`` runs on those
   topics' values). Their data are the sensor's whatever the parameters
-  say: nothing is undone, and an enabled compensation is named, since the
-  exported file replaces its coefficients.
+  say: nothing is undone, and an enabled compensation or a board rotation
+  is named, since the exported file replaces the coefficients.
 * **ArduPilot** (``PARM`` messages). ``IMU`` logs the corrected rate:
   ``logged = R (raw - P(clamp(T) - 35) + P(clamp(CALTEMP) - 35) - OFFS)``
   with ``R`` the ``AHRS_ORIENTATION`` rotation and ``P`` the
@@ -54,12 +54,13 @@ _CALTEMP_UNSET_C = -80.0
 
 
 def px4_note(name: str, params: dict) -> None:
-    """One note when a ULog was recorded with PX4 thermal compensation enabled (its sensor topics are uncompensated all the same)."""
-    enabled = sorted(key for key, value in params.items() if _PX4_ENABLE.match(key) and int(value) == 1)
-    if enabled:
+    """One note when a ULog was recorded with PX4 thermal compensation enabled or a board rotation (its sensor topics are the sensor's all the same)."""
+    said = [f"{key} = 1" for key, value in sorted(params.items()) if _PX4_ENABLE.match(key) and int(value) == 1]
+    said += [f"SENS_BOARD_ROT = {int(params['SENS_BOARD_ROT'])}"] if params.get("SENS_BOARD_ROT", 0) else []
+    if said:
         warnings.warn(
-            f"{name}: {', '.join(f'{key} = 1' for key in enabled)} in the log: PX4 compensates after sensor_gyro / sensor_accel are logged, "
-            "so they are read as the sensor gave them (nothing to undo); exported TC_* replace the log's",
+            f"{name}: {', '.join(said)} in the log: PX4 applies thermal compensation and the board rotation after sensor_gyro / sensor_accel "
+            "are logged, so they are read as the sensor gave them (nothing to undo); exported TC_* replace the log's",
             RecordingNote,
             stacklevel=3,
         )

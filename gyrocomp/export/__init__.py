@@ -21,7 +21,7 @@ import numpy as np
 
 from gyrocomp import units
 from gyrocomp.errors import InputError
-from gyrocomp.export.firmware import AXES
+from gyrocomp.export.firmware import AXES, SENSORS
 
 __all__ = ["Format", "FORMATS", "ExportOptions", "export_model", "reference_vectors"]
 
@@ -189,8 +189,6 @@ def _sensors(models: dict, options: ExportOptions) -> dict:
     (``sensor`` in ``model.json``: :func:`gyrocomp.pipeline.train.model_file`);
     any other to instance None (the format's ``--instance``) and ``options.device_id``, by unit.
     """
-    from gyrocomp.export.firmware import SENSORS
-
     logged = [name for name, model in models.items() if "sensor" in model.obj]
     if logged and (options.instance is not None or options.device_id):
         given = "--instance" if options.instance is not None else "--device-id"
@@ -199,12 +197,21 @@ def _sensors(models: dict, options: ExportOptions) -> dict:
     for name, model in models.items():
         sensor = SENSORS[units.model_unit(model)]
         if name in logged:
-            info = model.obj["sensor"]
-            key = (sensor, int(info["instance"]), int(info.get("device_id", 0)))
+            key = (sensor, *_logged_ids(model))
         else:
             key = (sensor, None, int(options.device_id))
         groups.setdefault(key, {})[name] = model
     return groups
+
+
+def _logged_ids(model) -> tuple[int, int]:
+    """The instance and device id of a flight-log axis (``sensor`` in ``model.json``), checked: a hand-edited value is refused, named."""
+    info = model.obj["sensor"]
+    ids = tuple(info.get(key, 0) if isinstance(info, dict) else None for key in ("instance", "device_id"))
+    for key, value in zip(("instance", "device_id"), ids):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise InputError(f"{model.name}: sensor {key} = {value!r}; a log's instance and device id are integers >= 0")
+    return ids
 
 
 def _blocks(models: dict, options: ExportOptions, default_instance: int) -> tuple[list, dict]:

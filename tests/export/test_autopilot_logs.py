@@ -54,7 +54,9 @@ def logs(tmp_path_factory):
 def test_px4_every_instance_in_one_file_with_its_device_id(logs, tmp_path, monkeypatch):
     for name in ("warmup.ulg",):
         (tmp_path / name).symlink_to(logs / name)
-    _, export = _run(tmp_path, monkeypatch, *PX4_RECIPE)
+    train, export = _run(tmp_path, monkeypatch, *PX4_RECIPE)
+    notes = [line for line in train.stderr.splitlines() if "TC_G_ENABLE" in line]
+    assert len(notes) == 1 and "TC_G_ENABLE = 1 in the log" in notes[0] and "nothing to undo" in notes[0] and "TC_A_ENABLE" not in notes[0]
     params = warmup.parameters(tmp_path / "tcal.params")
     assert params["TC_G_ENABLE"] == 1 and params["TC_A_ENABLE"] == 1
     for i in range(warmup.N_INSTANCES):
@@ -163,3 +165,31 @@ def test_one_ardupilot_gyro_from_a_rotated_compensated_log_meets_the_truth(logs,
     total = poly - (c[:, 0] + (c[:, 1] + c[:, 2] * x0) * x0) * x0 + np.array([params[f"INS_GYROFFS_{a}"] for a in "XYZ"])
     error = np.max(np.abs(np.rad2deg(total) - warmup.gyro_bias_dps(0, grid))) * 3600.0
     assert error < GYRO_TOLERANCE_DEG_H, error
+
+
+@pytest.mark.parametrize("field, value", [("instance", "0"), ("instance", -1), ("device_id", 1.5), ("instance", 7)])
+def test_a_hand_edited_instance_is_refused_in_one_line(logs, tmp_path, monkeypatch, field, value):
+    (tmp_path / "warmup.ulg").symlink_to(logs / "warmup.ulg")
+    _run(tmp_path, monkeypatch, ["train", "warmup.ulg", "--rate-col", "sensor_gyro_1_[xyz]", "--config", "firmware", "--out", "g.json"])
+    model = json.loads((tmp_path / "g.json").read_text())
+    model["axes"]["sensor_gyro_1_y"]["sensor"][field] = value
+    (tmp_path / "g.json").write_text(json.dumps(model))
+    result = CliRunner().invoke(app, ["export", "g.json", "--format", "px4", "--out", "g.params"])
+    assert result.exit_code == 2 and len(result.stderr.strip().splitlines()) == 1, result.stderr
+    expected = "gyro instance 7: PX4 has calibration slots 0..3" if value == 7 else f"g.json axis sensor_gyro_1_y: sensor {field} = {value!r}"
+    assert expected in result.stderr, result.stderr
+    assert not (tmp_path / "g.params").exists()
+
+
+def test_px4_parameters_are_named_and_nothing_is_undone():
+    """PX4's sensor topics precede its compensation and board rotation: one note, the data untouched."""
+    from gyrocomp.errors import RecordingNote
+    from gyrocomp.logparams import px4_note
+
+    with pytest.warns(RecordingNote, match=r"^x\.ulg: TC_A_ENABLE = 1, SENS_BOARD_ROT = 2 in the log: PX4 applies .* \(nothing to undo\)"):
+        px4_note("x.ulg", {"TC_A_ENABLE": 1, "TC_G_ENABLE": 0, "SENS_BOARD_ROT": 2})
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        px4_note("x.ulg", {"TC_A_ENABLE": 0, "TC_G_ENABLE": 0, "SENS_BOARD_ROT": 0})
