@@ -227,7 +227,7 @@ def test_ulog_gyro_and_accel_in_one_run_each_on_its_own_time_base(tmp_path):
         by_itself = pd.read_parquet(tmp_path / f"c_{topic}.parquet")
         assert len(together) == truth[topic]["n"]  # its own samples, none added from the other topic
         pd.testing.assert_frame_equal(together, by_itself, rtol=1e-12)
-        assert (tmp_path / f"c_{topic}_0.json").is_file()
+        assert (tmp_path / f"c_{topic}_0.meta.json").is_file()
         scale = 180 / np.pi if topic == "sensor_gyro" else 1.0  # the drift put in, in the recording's unit
         for a in "xyz":
             left = np.polyfit(together["temperature"], together[f"{topic}_0_{a}_compensated"], 1)[0]
