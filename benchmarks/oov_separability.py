@@ -91,7 +91,7 @@ def bump_columns(n, widths=10):
 def gain_beside_event(y, X, basis, noise, term, G):
     """``-2 log L`` gained by `term` beside the most likely column of `G` (found under the model without `term`).
 
-    :func:`gyrocomp.diagnose.unexplained.gain_beside` without its parameter
+    :func:`gyrocomp.diagnose.confirm.gain_beside` without its parameter
     charge, on block means `y` given here (the run's, or a draw's).
     """
     free = ("arw",) + tuple(t for t in TERMS if getattr(noise, t) > 0.0)

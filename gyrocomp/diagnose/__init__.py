@@ -29,10 +29,10 @@ measured temperature, white noise) on a fit recording, then
    report's ``unexplained.present`` is true and the gap of the selected
    model is not called explained. The selected effects that only stand in
    for what the tests flag are then unlisted
-   (:func:`gyrocomp.diagnose.unexplained.confirm`): a noise term without
-   its own signature on all runs, a periodic disturbance not found again
-   on the holdout, an effect that gains nothing beside the structure the
-   tests found on the fit run.
+   (:func:`gyrocomp.diagnose.confirm.confirm`, its named rules): a noise
+   term without its own signature on all runs, an effect the holdout
+   refutes at its fitted shape, an effect that gains nothing beside the
+   structure the tests found on the fit run.
 
 The gap and the localization compare each residual with the model's noise
 terms, whose white level is the fit run's sample-level one
@@ -63,9 +63,12 @@ import numpy as np
 from gyrocomp.config import bind, check_tables, load_config, settings_dict
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
+from gyrocomp.diagnose import confirm as _confirm
 from gyrocomp.diagnose import signature as _signature
 from gyrocomp.diagnose import unexplained as _unexplained
 from gyrocomp.diagnose.detectability import detection_limit
+from gyrocomp.diagnose.error_rate import error_rate
+from gyrocomp.diagnose.identify import unidentifiable
 from gyrocomp.diagnose.effects import EFFECTS, NEEDS_TEMPERATURE, Run, TemperatureScale, effect_params
 from gyrocomp.diagnose.select import Fitted, Problem, Search, extend, fit_baseline, holdout_fit, residual_of, sample_arw
 from gyrocomp.errors import InputError
@@ -87,6 +90,7 @@ class DiagnoseSettings:
     detection_power: float = 0.95
     max_effects: int = 8
     min_temperature_span_c: float = 2.0
+    identifiable_min_unique: float = 0.01
     temp_rate_smooth_s: float = 60.0
     thermal_lag_tau_s: tuple = (2.0, 28800.0)
     warmup_tau_s: tuple = (60.0, 14400.0)
@@ -211,7 +215,7 @@ def diagnose(
         gaps = {"baseline": _gaps(fit_p, hold_p, baseline, white, gapped)}
         # Effects that only stand in for structure the residual tests flag are unlisted (their own signature,
         # or no gain beside that structure): the verdict of the model that remains.
-        selected, verdict = _unexplained.confirm(
+        selected, verdict = _confirm.confirm(
             search,
             labelled,
             selected,
@@ -233,9 +237,10 @@ def diagnose(
                 "delta_bic": search.score(model) - search.score(start),
             }
         for effect, c in cand.items():
+            c["not_identifiable"] = unidentifiable(selection, start, first_step[effect], effect, s.identifiable_min_unique)
             c["detection_limit"] = (
                 None
-                if effect in selected.order
+                if effect in selected.order or c["not_identifiable"]
                 else detection_limit(selection, selected, effect, first_step[effect].spec.get(effect, {}), s.bic_margin, s.detection_power)
             )
         local = {} if gapped else _localization(fit_p, hold_p, models, gaps, s, white)
@@ -266,6 +271,8 @@ def diagnose(
             else {}
         ),
         "candidates": cand,
+        "selection": {"error_rate": error_rate(candidates, first_step, sum(p.y.size for p in selection), s.bic_margin,
+                                               unexplained_settings.family_alpha, signature_settings.family_alpha)},
         "selection_steps": steps,
         "skipped": skipped,
         "models": {name: _model_dict(m, start_effects) for name, m in models.items()},
@@ -381,8 +388,8 @@ def _as_list(holdout) -> list:
 def _protocol(selection, hold_p, unlisted=()) -> dict:
     """Which runs selected the effects, which one the held-out gap comes from, and whether it unlisted any.
 
-    An effect unlisted for its signature or for not being found again
-    (:func:`gyrocomp.diagnose.unexplained.confirm`, rules 1 and 2) was
+    An effect unlisted for its signature or refuted on the holdout
+    (:data:`gyrocomp.diagnose.confirm.RULES`, rules 1 to 3) was
     judged on the holdout too: the holdout then took part in what is
     listed, never in what was added.
     """

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-
-
 from gyrocomp.artefacts import artefact_header
 
 __all__ = ["to_json", "to_markdown", "summary_table", "format_value"]
@@ -30,6 +28,13 @@ def to_markdown(report: dict) -> str:
     if names:
         lines += [f"Recordings: {names}", ""]
     lines.append("**Selected effects:** " + _selected_words(report, code=True))
+    rows = _selected_rows(report)
+    if rows:
+        lines += ["", "## Selected model (fitted jointly on the selection runs)", "", "| effect | parameter | value | unit |", "|---|---|---|---|"]
+        lines += [f"| `{e}` | {k} | {v} | {u} |" for e, k, v, u in rows]
+    blind = _no_temperature_line(report)
+    if blind:
+        lines += ["", blind]
     lines += [""] + _unexplained_lines(report)
     lines += ["", "| model | gap fit | gap holdout |", "|---|---|---|"]
     for name in ("baseline", "selected"):
@@ -39,11 +44,18 @@ def to_markdown(report: dict) -> str:
     protocol = report["gap"].get("protocol")
     if protocol:
         lines += ["", f"Held-out protocol: {protocol['description']}."]
+    rate = (report.get("selection") or {}).get("error_rate")
+    if rate:
+        lines += ["", f"Error rates: {rate['statement']}."]
     if report.get("gap_note"):
         lines += ["", report["gap_note"] + "."]
     lines += [
         "",
-        "| candidate | gap fit | gap holdout | delta BIC | parameters | detection limit |",
+        "## Candidates, each fitted alone beside the baseline",
+        "",
+        "One-at-a-time fits: each candidate's parameters without the other effects; the selected model's are above.",
+        "",
+        "| candidate | gap fit | gap holdout | delta BIC | parameters (fitted alone) | detection limit |",
         "|---|---|---|---|---|---|",
     ]
     for effect, c in report["candidates"].items():
@@ -56,7 +68,9 @@ def to_markdown(report: dict) -> str:
     lines += [
         "",
         "Detection limit: for an effect not selected, the weakest amplitude (thermal lag: time constant) "
-        f"an ideal detector would find beside the selected model with probability {format_value(power)}.",
+        f"an ideal detector would find beside the selected model with probability {format_value(power)}: looked for and "
+        "absent. A candidate the selection runs cannot identify at any amplitude is marked \"not identifiable from these "
+        "runs\" instead, with the reason.",
     ]
     if report.get("skipped"):
         lines += ["", "Skipped:"] + [f"- `{e}`: {why}" for e, why in report["skipped"].items()]
@@ -73,7 +87,8 @@ def to_markdown(report: dict) -> str:
 
 
 def summary_table(report: dict):
-    """A :class:`rich.table.Table` of the gap before and after, per candidate."""
+    """The selected model's parameters and a table of the gap before and after, per candidate (a :class:`rich.console.Group`)."""
+    from rich.console import Group
     from rich.table import Table
 
     sel = report["selected_effects"]
@@ -91,7 +106,33 @@ def summary_table(report: dict):
     for effect, c in report["candidates"].items():
         mark = " *" if effect in sel else ""
         table.add_row(f"+ {effect}{mark}", format_value(c["gap_fit"]), format_value(c["gap_holdout"]), format_value(c["delta_bic"]), _limit(effect, c, sel))
-    return table
+    parts = []
+    rows = _selected_rows(report)
+    if rows:
+        model = Table(title="selected model (fitted jointly)")
+        for col in ("effect", "parameter", "value", "unit"):
+            model.add_column(col, justify="right" if col == "value" else "left")
+        for row in rows:
+            model.add_row(*row)
+        parts.append(model)
+    table.caption = "\n".join(x for x in (caption, _no_temperature_line(report)) if x) or None
+    return Group(*parts, table)
+
+
+def _selected_rows(report):
+    """``(effect, parameter, value, unit)`` of every selected effect, from the selected model's joint fit."""
+    params = ((report.get("models") or {}).get("selected") or {}).get("params", {})
+    return [(effect, name, format_value(v["value"]), v["unit"]) for effect in report["selected_effects"]
+            for name, v in params.get(effect, {}).items()]
+
+
+def _no_temperature_line(report):
+    """One sentence on what a recording without temperature cannot tell apart, or None."""
+    if not any(str(why).startswith("no temperature column") for why in (report.get("skipped") or {}).values()):
+        return None
+    return ("No temperature channel: a drift that follows temperature cannot be told from a slow noise "
+            "(rate random walk, bias instability) or a drift in time, so the temperature effects are not "
+            "judged, and a noise term or time effect listed here may stand for a thermal drift.")
 
 
 def _selected_words(report, code=False):
@@ -111,8 +152,15 @@ def _size_words(un):
     parts = []
     for run, v in un.get("size", {}).items():
         share = v.get("share_of_gap")
-        parts.append(f"{run}: rms {format_value(v['rms_deg_h'])} deg/h" + (f", {100 * share:.0f} % of the gap" if share is not None else ""))
+        parts.append(f"{run}: rms {format_value(v['rms_deg_h'])} deg/h" + ("" if share is None else _share_words(share)))
     return "unexplained part " + "; ".join(parts)
+
+
+def _share_words(share):
+    """The share of the gap in words: below 1 % it is small, not zero (the structure is significant)."""
+    if share < 0.01:
+        return ", under 1 % of the gap (significant, but small beside the gap)"
+    return f", {100 * share:.0f} % of the gap"
 
 
 def _unexplained_lines(report):
@@ -141,6 +189,8 @@ def _limit(effect, candidate, selected):
     """``>= value unit`` of a candidate's detection limit, ``selected`` or ``beyond range``."""
     if effect in selected:
         return "selected"
+    if candidate.get("not_identifiable"):
+        return candidate["not_identifiable"]
     limit = candidate.get("detection_limit")
     if not limit:
         return "beyond search range"

@@ -206,7 +206,7 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
     extra : sequence of ndarray, optional
         Block-level columns added to each run's design (one array of shape
         ``(n_blocks, q)`` per run): the term judged beside structures found
-        in the residual (:func:`gyrocomp.diagnose.unexplained.confirm`).
+        in the residual (:func:`gyrocomp.diagnose.confirm.confirm`).
 
     Returns
     -------

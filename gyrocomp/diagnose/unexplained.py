@@ -101,12 +101,11 @@ import numpy as np
 from scipy import linalg, stats
 
 from gyrocomp.config import bind, load_config
-from gyrocomp.diagnose.effects import KINDS, PER_RUN
-from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
+from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise
 from gyrocomp.diagnose import signature
 from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins, temperature_edges
 
-__all__ = ["UnexplainedSettings", "get_config", "verdict", "confirm", "gain_beside", "replication", "steadiness", "holm", "fisher_g", "variance_segments", "variance_groups"]
+__all__ = ["UnexplainedSettings", "get_config", "verdict", "assess", "structure_found", "Prepared", "holm", "fisher_g", "variance_segments", "variance_groups"]
 
 _DEG_H = 3600.0
 """deg/h per deg/s."""
@@ -175,275 +174,28 @@ def verdict(
         means and its ``share_of_gap``, None without `baseline_residuals`),
         ``tests`` (every test's statistic and p).
     """
-    return _verdict(runs, model, settings, baseline_residuals, signature_settings)[0]
+    return assess(runs, model, settings, baseline_residuals, signature_settings)[0]
 
 
-def confirm(search, runs, model, settings: UnexplainedSettings = UnexplainedSettings(), baseline_residuals=None,
-            signature_settings: signature.SignatureSettings = signature.SignatureSettings()):
-    """Unlist the selected effects that only stand in for structure the residual tests flag; the final verdict.
+def structure_found(problem, model, s: UnexplainedSettings = UnexplainedSettings()):
+    """Block-level columns of the deterministic structures the tests find on `problem` under `model`, or None.
 
-    An effect is listed only when its shape is that effect's. After the
-    selection, while :func:`verdict` finds something unexplained, one
-    selected effect (none of the start model's) is unlisted and the model
-    refitted without it (``search.without``):
-
-    1. a noise term that does not show its own signature on all runs
-       (:func:`gyrocomp.diagnose.signature.check`: its level agrees between
-       the runs, its innovations are white without trend or temperature
-       dependence, its Allan slope holds, a flicker's level is Gaussian) and
-       that, beside the deterministic structures the tests find on the fit
-       run in its place (the model without it), gains at most
-       ``bic_margin`` (:func:`gain_beside`): it absorbs what the vocabulary
-       does not explain. A true flicker beside a drift keeps its place (the
-       drift is reported) -- unless the tests of its own statistics (level
-       agreement, Allan slope, Gaussian levels) refuse it, and still refuse
-       it with that structure in the fit run's design: then the wander is
-       not that noise. A tone that repeats in every run at the same time
-       since power-on (the signature's spectrum replication) is not judged
-       again beside that structure: the test reads the smallest power over
-       the runs, which a structure taken out of the fit run alone can only
-       lower, whatever the runs share. When the tests find nothing in its place,
-       the term goes if its own statistics refused it (at the signature's
-       false-refusal rate) and stays if only the other tests did (a trend
-       beside it);
-    2. otherwise an effect with per-run columns (a periodic disturbance's
-       phase and amplitude) that the holdout does not need at the effect's
-       fitted shape (:func:`replication`, p above ``replication_alpha``), or
-       whose per-run columns differ between parts of the runs (:func:`steadiness`,
-       p below ``replication_alpha``): an interference keeps its amplitude
-       and phase, where a sinusoid fitted to a transient or to a wander
-       that comes late does not;
-    3. otherwise the effect that, beside the deterministic structures the
-       tests found on the fit run (a step, a step at one temperature, a
-       spectral line, temperature bins, windows after power-on, segments of
-       time, a heating/cooling offset: :meth:`_Prepared.structure`), gains
-       least: ``Delta(-2 log L) - k ln n`` of removing it from the fit
-       run's model with those columns in the design (its nonlinear
-       parameters kept, the noise refitted), when that gain is at most the
-       selection's ``bic_margin``. The structures are those kept together
-       (:meth:`_Prepared.explain`), or any one found that those make
-       redundant: the same residual described another way. An effect that
-       earns its place against the vocabulary but not beside a step at one
-       time, say, described the step; a hysteresis fitted to a bias that
-       steps at one temperature leaves one crossing as a step in time, and
-       does not earn its place beside the step in temperature.
-
-    The rules only unlist, and only when the verdict is present, so a
-    recording the model explains is never touched (its false-alarm rate is
-    the verdict's). The structures are looked for on the fit run only;
-    rules 1 and 2 also read the holdout (the signature's agreement between
-    runs, the replication), which then took part in what is listed (never
-    in what was added): the report's protocol says so.
-
-    Parameters
-    ----------
-    search : gyrocomp.diagnose.select.Search
-        The finished search: ``fit`` (the fit run's Problem), ``baseline``
-        (its effects are kept), ``margin``, ``without(model, effect)``.
-    runs : sequence of (str, Problem)
-        As :func:`verdict`; the run labelled ``"fit"`` is the one searched
-        for structures.
-    model : gyrocomp.diagnose.select.Fitted
-        The selected model.
-    settings, baseline_residuals, signature_settings
-        As :func:`verdict`.
-
-    Returns
-    -------
-    model : Fitted
-        The model with the unlisted effects removed.
-    result : dict
-        The verdict of that model (:func:`verdict`), with ``unlisted``: one
-        ``{"effect", "reason", "gain", "holdout"}`` per unlisted effect (``holdout``: the
-        holdout's evidence took part), in order; the
-        verdict is present when any effect was unlisted.
+    The deterministic tests of the run (Holm at ``family_alpha`` over that
+    run's tests), the findings that say the same thing reported once
+    (:meth:`Prepared.explain`).
     """
-    s = settings
-    kept = len(search.baseline.order)
-    unlisted = []
-    while True:
-        result, prepared = _verdict(runs, model, settings, baseline_residuals, signature_settings)
-        chosen = list(model.order[kept:])
-        if not result["present"] or not chosen:
-            break
-        failing = [t for t in chosen if t in result["signatures"] and not result["signatures"][t]["ok"]]
-        held = next((p for label, p in runs if label == "holdout"), None)
-        lost = {e: replication(held, model, e) for e in chosen if KINDS[e].per_run and held is not None}
-        lost = {e: p for e, p in lost.items() if p > s.replication_alpha}
-        unsteady = {e: steadiness([p for _, p in runs], model, e, s.steady_segments, s.steady_min_cycles)
-                    for e in chosen if KINDS[e].per_run and e not in lost}
-        unsteady = {e: p for e, p in unsteady.items() if p < s.replication_alpha}
-        fit_p = next((p for label, p in runs if label == "fit"), None)
-        in_place = {t: _in_place(search, fit_p, model, t, s) for t in failing}
-        # A term that gains little beside the structure found in its place stands in for it; one whose own
-        # statistics (level, slope, distribution) refuse it, with nothing found in its place or still beside
-        # what was found, is not that noise. A failure of the other tests alone may be a structure beside it.
-        standing_in = {}
-        for t, (g, G) in in_place.items():
-            if g is not None and g <= search.margin:
-                standing_in[t] = g
-            elif not result["signatures"][t]["own_ok"] and (
-                G is None or result["signatures"][t]["tone_repeats"]
-                or not signature.check(t, [p for _, p in runs], model, signature_settings,
-                                       [G if p is fit_p else np.empty((p.y.size, 0)) for _, p in runs]).own_ok
-            ):
-                standing_in[t] = -np.inf
-        if standing_in:
-            effect = min(standing_in, key=standing_in.get)
-            why = "; ".join(result["signatures"][effect]["reasons"][:2])
-            gain, G = in_place[effect]
-            if gain is None or gain > search.margin:
-                where = "nor beside the structure the tests find on the fit run in its place" if G is not None else (
-                    "and the tests find no structure on the fit run in its place")
-                entry = {"effect": effect, "gain": None if gain is None else float(gain), "holdout": True, "reason":
-                         f"its own statistics are not those of {effect.replace('_', ' ')} ({why}), {where}: "
-                         "it stands in for a residual the vocabulary does not explain"}
-            else:
-                entry = {"effect": effect, "gain": float(gain), "holdout": True, "reason":
-                         f"it does not show its own signature ({why}) and gains {gain:.1f} in BIC "
-                         f"(<= {search.margin:g}) beside the structure the tests find on the fit run in its place"}
-        elif lost:
-            effect = max(lost, key=lost.get)
-            entry = {"effect": effect, "gain": None, "holdout": True, "reason":
-                     f"at its fitted {', '.join(model.spec.get(effect, {}))} it is not found again on the holdout "
-                     f"(p = {lost[effect]:.2g} > {s.replication_alpha:g})"}
-        elif unsteady:
-            effect = min(unsteady, key=unsteady.get)
-            entry = {"effect": effect, "gain": None, "holdout": True, "reason":
-                     f"its amplitude and phase differ between {s.steady_segments} parts of the runs "
-                     f"(p = {unsteady[effect]:.2g} < {s.replication_alpha:g}): not a steady interference"}
-        else:
-            fit = next((pr for pr in prepared if pr.label == "fit"), None)
-            names = [k for k in (fit.kept if fit is not None else []) if not k.startswith("noise_")]
-            if not names:
-                break
-            # The structures kept together, and each one the tests found that those make redundant on its own: the
-            # same residual described another way (a step at one temperature, of which a step in time is one crossing).
-            others = [k for k, t in fit.tests.items() if t.get("rejected") and not k.startswith("noise_") and k not in names]
-            gains = {}
-            for e in chosen:
-                gains[e] = min((gain_beside(fit.problem, model, e, fit.structure(G)), G) for G in [names] + [[k] for k in others])
-            effect = min(gains, key=lambda e: gains[e][0])
-            gain, beside = gains[effect]
-            if gain > search.margin:
-                break
-            entry = {"effect": effect, "gain": float(gain), "holdout": False, "reason":
-                     f"beside the {', '.join(n.replace('_', ' ') for n in beside)} the tests found on the fit run it gains "
-                     f"{gain:.1f} in BIC (<= {search.margin:g}): it stands in for that structure"}
-        unlisted.append(entry)
-        model = search.without(model, effect)
-    if unlisted:
-        result["present"] = True
-        result["hints"] = [f"{u['effect']} is not listed: {u['reason']}" for u in unlisted] + result["hints"]
-    result["unlisted"] = unlisted
-    return model, result
-
-
-def replication(problem, model, effect):
-    """p-value that `effect`'s per-run columns explain nothing on another run (`problem`), at `model`'s shape.
-
-    The model's nonlinear parameters and shared coefficients are frozen at
-    their fit-run values, the per-run columns refitted, the noise levels
-    refitted on that run; the likelihood-ratio statistic of the effect's own
-    per-run columns (a periodic disturbance's sine and cosine at its fitted
-    period) is ``chi^2_k`` when the effect is absent there (Wilks). A shape
-    the effect has on the gyro is found again; one fitted to something else
-    on one run (a sinusoid fitted to a bias jump at one temperature) is not.
-    """
-    Xb, names = problem.design_blocks(model.spec)
-    if names != model.names:
-        raise ValueError(f"design {names} differs from the model's {model.names}")
-    free = np.array([n in PER_RUN for n in names])
-    own = np.array([n in KINDS[effect].per_run for n in names])
-    y = problem.y - Xb[:, ~free] @ model.beta[~free]
-    terms = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
-    noise, with_it, _ = fit_noise(y, Xb[:, free], problem.basis, model.noise, terms)
-    without = profile_deviance(y, Xb[:, free & ~own], problem.basis.whitener(noise))[0]
-    return float(stats.chi2.sf(max(without - with_it, 0.0), int(own.sum())))
-
-
-def steadiness(problems, model, effect, segments, min_cycles):
-    """p-value that `effect`'s per-run columns keep their coefficients over each run of `problems`.
-
-    On each run the model's shared coefficients are frozen at their fit-run
-    values and the noise levels refitted; the effect's per-run columns (a
-    periodic disturbance's sines and cosines) get one set of coefficients in
-    each of `segments` consecutive parts of the run instead of one for the
-    run (fewer parts where a part would hold less than `min_cycles` of the
-    effect's ``period_s``; none below two). The likelihood-ratio statistics
-    of the runs are independent and add: ``chi^2`` with the columns gained,
-    when the effect keeps one amplitude and phase (Wilks).
-    """
-    stat, dof = 0.0, 0
-    for problem in problems:
-        Xb, names = problem.design_blocks(model.spec)
-        if names != model.names:
-            raise ValueError(f"design {names} differs from the model's {model.names}")
-        n = problem.y.size
-        period = model.spec.get(effect, {}).get("period_s")
-        k = segments if period is None else min(segments, int(n * problem.basis.block_s // (min_cycles * period)))
-        if k < 2:
-            continue
-        free = np.array([c in PER_RUN for c in names])
-        own = np.array([c in KINDS[effect].per_run for c in names])
-        y = problem.y - Xb[:, ~free] @ model.beta[~free]
-        part = np.arange(n) * k // n
-        split = np.hstack([Xb[:, free & ~own]] + [Xb[:, own] * (part == j)[:, None] for j in range(k)])
-        terms = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
-        noise, with_parts, _ = fit_noise(y, split, problem.basis, model.noise, terms)
-        whole = profile_deviance(y, Xb[:, free], problem.basis.whitener(noise))[0]
-        stat += max(whole - with_parts, 0.0)
-        dof += np.linalg.matrix_rank(split) - np.linalg.matrix_rank(Xb[:, free])
-    return float(stats.chi2.sf(stat, dof)) if dof > 0 else 1.0
-
-
-def _in_place(search, problem, model, term, s: UnexplainedSettings):
-    """:func:`gain_beside` of noise `term` beside the structures the tests find on the fit run without it, and their columns.
-
-    The deterministic tests of the fit run under the model without `term`
-    (Holm at ``family_alpha`` over that run's tests), the findings that say
-    the same thing reported once (:meth:`_Prepared.explain`); with none,
-    ``(None, None)`` (no structure a test describes takes its place).
-    """
-    if problem is None:
-        return None, None
-    pr = _Prepared("fit", problem, search.without(model, term), s)
+    pr = Prepared("fit", problem, model, s)
     names = list(pr.tests)
     rejected = holm([pr.tests[k]["p"] for k in names], s.family_alpha)
     found = [k for k, r in zip(names, rejected) if r and not k.startswith("noise_")]
     kept = [k for k in pr.explain(found, s.family_alpha / max(len(names), 1)) if not k.startswith("noise_")]
-    if not kept:
-        return None, None
-    G = pr.structure(kept)
-    return gain_beside(problem, model, term, G), G
+    return pr.structure(kept) if kept else None
 
 
-def gain_beside(problem, model, effect, G):
-    """``Delta(-2 log L) - k ln n`` of removing `effect` from `model` on `problem`, the columns `G` in the design.
-
-    The effect's nonlinear parameters and the others' are kept; the noise
-    levels of the model's terms (without `effect` when it is one) are
-    refitted by maximum likelihood; ``k`` is the effect's parameter count
-    and ``n`` the number of block means (the selection's BIC, eq. of
-    :meth:`gyrocomp.diagnose.select.Problem.bic`).
-    """
-    y, basis = problem.y, problem.basis
-    X = problem.design_blocks(model.spec)[0]
-    free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
-    full = fit_noise(y, np.hstack([X, G]), basis, model.noise, free)[1]
-    if effect in TERMS:
-        reduced = dataclasses.replace(model.noise, **{effect: 0.0})
-        less = fit_noise(y, np.hstack([X, G]), basis, reduced, tuple(t for t in free if t != effect))[1]
-    else:
-        Xm = problem.design_blocks({k: v for k, v in model.spec.items() if k != effect})[0]
-        less = fit_noise(y, np.hstack([Xm, G]), basis, model.noise, free)[1]
-    return float(less - full - KINDS[effect].n_params_of(model.spec.get(effect, {})) * np.log(y.size))
-
-
-def _verdict(runs, model, settings, baseline_residuals, signature_settings):
-    """:func:`verdict` and the prepared runs (their structures, for :func:`confirm`)."""
+def assess(runs, model, settings, baseline_residuals, signature_settings):
+    """:func:`verdict` and the prepared runs (their structures, for :func:`gyrocomp.diagnose.confirm.confirm`)."""
     s = settings
-    prepared = [_Prepared(label, p, model, s) for label, p in runs]
+    prepared = [Prepared(label, p, model, s) for label, p in runs]
     tests = [(pr, name, result) for pr in prepared for name, result in pr.tests.items()]
     rejected = holm([t[2]["p"] for t in tests], s.family_alpha)
     alpha = s.family_alpha / max(len(tests), 1)
@@ -562,7 +314,7 @@ def variance_groups(groups):
     return float(stat), float(p), np.array([1.4826 * np.median(np.abs(q - np.median(q))) for q in groups])
 
 
-class _Prepared:
+class Prepared:
     """One run: its innovations under the model, its structure columns and its tests."""
 
     def __init__(self, label, problem, model, s: UnexplainedSettings):

@@ -15,8 +15,8 @@ import pytest
 from scipy import stats
 
 from gyrocomp.diagnose import DiagnoseSettings
+from gyrocomp.diagnose import confirm as cf
 from gyrocomp.diagnose import signature as sg
-from gyrocomp.diagnose import unexplained as ux
 from gyrocomp.diagnose.effects import Run, TemperatureScale
 from gyrocomp.effects.likelihood import NoiseBasis
 from gyrocomp.diagnose.select import Problem, Search, extend, fit_baseline
@@ -157,7 +157,7 @@ def test_a_flicker_beside_a_tone_that_repeats_is_not_listed():
     # of the fit run -- which only lowers the tone's smallest power over the runs; the tone repeats, so it is not listed
     runs = _problems(_recording(41, "chirp", 0.0015, bias=2.0 / 3600.0), _recording(1041, "chirp", 0.0015, bias=2.0 / 3600.0))
     search = Search([runs[0]], [])
-    model, v = ux.confirm(search, [("fit", runs[0]), ("holdout", runs[1])], extend(runs[0], search.baseline, "bias_instability"))
+    model, v = cf.confirm(search, [("fit", runs[0]), ("holdout", runs[1])], extend(runs[0], search.baseline, "bias_instability"))
     assert model.order == ()
     assert v["present"] and v["unlisted"][0]["effect"] == "bias_instability"
     assert "repeats in every run" in v["unlisted"][0]["reason"] and "nor beside" in v["unlisted"][0]["reason"]
