@@ -107,7 +107,7 @@ class GreyBoxDrift(Params):
     grid_points : int
         Points of each log grid.
     widths_c : tuple of float
-        Grid of the play's width [degC].
+        Grid of the hysteresis width [degC], for the play and for the relay (a relay gains only near its width: keep it fine).
     block_s : float
         Shortest likelihood block [s].
     max_blocks : int
@@ -156,7 +156,7 @@ class GreyBoxDrift(Params):
         lag_tau_s=(10.0, 14400.0),
         warmup_tau_s=(60.0, 14400.0),
         grid_points=25,
-        widths_c=(0.5, 1.0, 2.0, 4.0, 8.0, 16.0),
+        widths_c=(0.5, 0.574, 0.66, 0.758, 0.871, 1.0, 1.15, 1.32, 1.52, 1.74, 2.0, 2.3, 2.64, 3.03, 3.48, 4.0, 4.59, 5.28, 6.06, 6.96, 8.0, 9.19, 10.6, 12.1, 13.9, 16.0),
         block_s=10.0,
         max_blocks=360,
         bic_margin=10.0,
