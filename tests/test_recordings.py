@@ -233,8 +233,9 @@ def test_lsm6dsm_bursts_read_as_segments_with_the_published_slopes():
 
 
 def test_the_command_line_says_what_resample_filled(tmp_path):
-    """A gap: `allan` analyses each segment alone (never across the gap); `--resample` is never silent:
-    a note on stderr, and the note in the artefact's inputs."""
+    """A gap: `allan` analyses each segment alone (never across the gap) and pools them into one series,
+    each segment's on request (`--segments`); `--resample` is never silent: a note on stderr, and the note
+    in the artefact's inputs."""
     import json
 
     from typer.testing import CliRunner
@@ -248,10 +249,15 @@ def test_the_command_line_says_what_resample_filled(tmp_path):
     segmented = CliRunner().invoke(app, ["allan", str(path), "--out", str(out)])
     assert segmented.exit_code == 0, segmented.output
     assert "2 segments: 1 gaps, the longest 200.5 s (not interpolated)" in segmented.stderr
+    (pooled,) = json.loads(out.read_text())["series"]
+    assert pooled["name"] == "gappy.csv" and pooled["n"][0] == 2 * 399  # both segments' terms, none across the gap
+    assert CliRunner().invoke(app, ["allan", str(path), "--out", str(out), "--segments"]).exit_code == 0
     series = json.loads(out.read_text())["series"]
-    assert [s["name"] for s in series] == ["gappy.csv segment 1", "gappy.csv segment 2"]
-    for s in series:  # each segment alone: white noise of 0.01 deg/s at 2 Hz is ARW 0.424 deg/sqrt(h)
-        assert s["n"][0] == 399 and s["terms"]["arw"]["value"] == pytest.approx(0.01 * np.sqrt(0.5) * 60, rel=0.1)
+    assert [s["name"] for s in series] == ["gappy.csv", "gappy.csv segment 1", "gappy.csv segment 2"]
+    for s in series[1:]:
+        assert s["n"][0] == 399
+    for s in series:  # white noise of 0.01 deg/s at 2 Hz is ARW 0.424 deg/sqrt(h)
+        assert s["terms"]["arw"]["value"] == pytest.approx(0.01 * np.sqrt(0.5) * 60, rel=0.1)
     result = CliRunner().invoke(app, ["allan", str(path), "--out", str(out), "--resample"])
     assert result.exit_code == 0, result.output
     note = "resampled onto a uniform 0.5 s grid: 1 gaps filled by linear interpolation, the longest 200.5 s"
