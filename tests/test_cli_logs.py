@@ -7,12 +7,15 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import pytest
 from rich.console import Console
 from typer.testing import CliRunner
 
 from gyrocomp.cli import app
 from gyrocomp.cli._app import SIGPIPE_EXIT, LogLines, globals_first
+from gyrocomp.recordings import ColumnSpec
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE = REPO / "sample_data" / "oven_test.parquet"
@@ -43,6 +46,38 @@ def test_log_lines_at_most_every_ten_seconds():
         "gyrocomp: diagnose: 3/8 (38%), 10 s",
         "gyrocomp: diagnose: 6/8 (75%), 21 s",
     ]
+
+
+def test_log_lines_say_each_new_stage_at_once_after_the_first_ten_seconds():
+    now = [0.0]
+    console = Console(record=True, width=200, force_terminal=False)
+    lines = LogLines(console, "decompose", every_s=10.0, clock=lambda: now[0])
+    for t, done, stage in [(0.5, 0, "decompose gx (1/2)"), (11.0, 1000, "decompose gy (2/2)"), (12.0, 1500, None), (13.0, 2000, "writing c.parquet")]:
+        now[0] = t
+        lines(done, 2000, stage)
+    assert console.export_text().splitlines() == [
+        "gyrocomp: decompose gy (2/2): 1000/2000 (50%), 11 s",
+        "gyrocomp: writing c.parquet: 2000/2000 (100%), 13 s",
+    ]
+
+
+def test_a_multi_axis_decomposition_counts_one_whole_then_says_it_writes(tmp_path):
+    """The axes are parts of one count: it rises to 100 % once, at the end of the last axis, then `writing`."""
+    from gyrocomp.commands.decompose import write_axes
+    from gyrocomp.decompose import DecomposeSettings
+    from gyrocomp.recordings import recording_from_frame
+
+    t = np.arange(2000) / 10.0
+    rng = np.random.default_rng(0)
+    frame = pd.DataFrame({"time": t, "gx": rng.normal(size=t.size), "gy": rng.normal(size=t.size), "gz": rng.normal(size=t.size)})
+    rec = recording_from_frame(frame, name="three.csv", columns=ColumnSpec(rate="gx,gy,gz"))
+    seen = []
+    write_axes(rec, DecomposeSettings(method="emd"), tmp_path / "c.parquet", progress=lambda d, n, description=None: seen.append((d, n, description)))
+    done = [d for d, _, _ in seen]
+    assert {n for _, n, _ in seen} == {3000} and done == sorted(done)
+    assert [d for d in done if d == 3000] == [3000, 3000]  # the end of the last axis, then the writing stage
+    assert seen[-1][2] == "writing c.parquet"
+    assert [s for s in dict.fromkeys(s for _, _, s in seen)] == ["decompose gx (1/3)", "decompose gy (2/3)", "decompose gz (3/3)", "writing c.parquet"]
 
 
 def test_progress_lines_when_stderr_is_not_a_terminal(tmp_path, monkeypatch):

@@ -235,10 +235,12 @@ LOG_EVERY_S = 10.0
 
 
 class LogLines:
-    """Progress as plain lines, at most one every `every_s` seconds.
+    """Progress as plain lines, at most one every `every_s` seconds, and one at each new stage.
 
     The first comes `every_s` after the start at the earliest, so a command
-    that fails at once still writes one line only, its error.
+    that fails at once still writes one line only, its error. After that a
+    new description (the next axis, ``writing ...``) is a line at once, so
+    a log shows what a long last stage is doing.
 
     Parameters
     ----------
@@ -261,10 +263,11 @@ class LogLines:
         self.last = self.start
 
     def __call__(self, done: int, total: int, description: str | None = None) -> None:
+        changed = description is not None and description != self.description
         if description is not None:
             self.description = description
         now = self.clock()
-        if now - self.last < self.every_s:
+        if now - self.last < self.every_s and not (changed and now - self.start >= self.every_s):
             return
         self.last = now
         share = f" ({100.0 * done / total:.0f}%)" if total else ""

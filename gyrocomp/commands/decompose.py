@@ -168,7 +168,7 @@ def _columns(recording, result, settings, seed: int):
     return columns, header
 
 
-def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers: int = 1, progress: Callable[[int, int], None] | None = None):
+def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, workers: int = 1, progress: Callable[..., None] | None = None):
     """Decompose every axis of a recording and write them into one ``components.parquet`` and its sidecar.
 
     Each axis is decomposed alone, with the same `seed` (the seed of axis
@@ -191,8 +191,11 @@ def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, wo
         column), ``fs_hz`` and ``axes``: per axis its ``unit`` and
         ``components`` (its columns). The sidecar lists per axis (``axes``)
         the :func:`~gyrocomp.decompose.component_stats` of its components.
-    seed, workers, progress
+    seed, workers
         As :func:`gyrocomp.decompose.decompose`.
+    progress : callable(done, total, description=None), optional
+        The axes counted as one whole (:mod:`gyrocomp.progress`), then a
+        ``writing`` stage.
 
     Returns
     -------
@@ -207,10 +210,13 @@ def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, wo
     columns = {"time": recording.time_s}
     if recording.temperature_c is not None:
         columns["temperature"] = recording.temperature_c
+    from gyrocomp.progress import part, stage
+
     results, axes, stats = {}, {}, {}
-    for axis in recording.axes:
+    n_axes = len(recording.axes)
+    for index, axis in enumerate(recording.axes):
         one = recording.axis(axis.name)
-        result = decompose(one.rate_dps, settings, seed=seed, workers=workers, callback=progress)
+        result = decompose(one.rate_dps, settings, seed=seed, workers=workers, callback=part(progress, index, n_axes, f"decompose {axis.name}"))
         names = [f"{axis.name}_{name}" for name in result.names]
         columns[axis.name] = one.rate_dps
         columns.update(zip(names, result.components))
@@ -223,6 +229,7 @@ def write_axes(recording, settings, out: str | os.PathLike, *, seed: int = 0, wo
     header.update(components=[n for a in axes.values() for n in a["components"]], fs_hz=recording.fs_hz, axes=axes)
     sidecar = artefacts.artefact_header(SIDECAR_SCHEMA, inputs=header["inputs"], settings=header["settings"], seed=seed)
     sidecar.update(method=settings.method, fs_hz=recording.fs_hz, axes=stats)
+    stage(progress, n_axes, f"writing {Path(out).name}")
     artefacts.write_table(out, columns, header)
     artefacts.write_json(artefacts.sidecar_path(out), sidecar)
     return results, sidecar
