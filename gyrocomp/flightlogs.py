@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import fnmatch
 import io
 import warnings
 from typing import Iterator
@@ -49,6 +48,7 @@ from typing import Iterator
 import numpy as np
 
 from gyrocomp import logparams
+from gyrocomp.columns import matching_columns
 from gyrocomp.errors import InputError, RecordingNote
 
 __all__ = ["read_log", "read_logs"]
@@ -155,20 +155,20 @@ def read_logs(name: str, kind: str, spec) -> list[tuple]:
     patterns = [p.strip() for p in spec.rate.split(",") if p.strip()]
     if spec.rate == "rate":  # the column options' default: the first gyro
         patterns = [_DEFAULT_RATE[kind]]
-    chosen = [s for s in streams if any(fnmatch.fnmatchcase(c, p) for c in s.columns for p in patterns)]
+    chosen = [s for s in streams if any(matching_columns(list(s.columns), p) for p in patterns)]
     if not chosen:
         every = [c for s in streams for c in s.columns]
         raise InputError(f"{name}: no column matches {', '.join(repr(p) for p in patterns)}; the log has {', '.join(every)}")
     found = []
     for stream in chosen:
-        axes = [c for c in stream.units if any(fnmatch.fnmatchcase(c, p) for p in patterns)]  # a glob skips the temperature
+        axes = [c for c in stream.units if any(c in matching_columns(list(stream.units), p) for p in patterns)]  # a glob skips the temperature
         if not axes:
             raise InputError(f"{name}: {', '.join(repr(p) for p in patterns)} selects no sensor axis; {stream.name} has {', '.join(stream.units)}")
         if spec.temperature == "temperature":  # the default: the stream's own temperature
             temps = [c for c in stream.columns if c not in stream.units]
         else:
             wanted = [p.strip() for p in spec.temperature.split(",") if p.strip()]
-            temps = [c for c in stream.columns if any(fnmatch.fnmatchcase(c, p) for p in wanted)]
+            temps = [c for c in stream.columns if any(c in matching_columns(list(stream.columns), p) for p in wanted)]
         resolved = dataclasses.replace(
             spec,
             time="time",

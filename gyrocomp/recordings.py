@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Callable, Iterator, Mapping, Sequence
 import numpy as np
 
 from gyrocomp.artefacts import file_sha256, parquet_header
+from gyrocomp.columns import matching_columns
 from gyrocomp.errors import InputError, RecordingNote
 
 if TYPE_CHECKING:  # pandas is imported where a function needs it: the Parquet path of a recording never does
@@ -1435,17 +1436,6 @@ def _has_numbers(series) -> bool:
     import pandas as pd
 
     return bool(pd.to_numeric(pd.Series(series), errors="coerce").notna().any())
-
-
-def matching_columns(names: Sequence[str], pattern: str) -> list[str]:
-    """The names that `pattern` selects: the name itself when the file has it, else the names matching it as a shell glob.
-
-    An exact name comes first, so a name with brackets (``"Temperatur [°C]"``)
-    is not read as the glob character class ``[°C]`` (issue 35 item 6).
-    """
-    if pattern in names:
-        return [pattern]
-    return [c for c in names if fnmatch.fnmatchcase(c, pattern)]
 
 
 def _is_glob(pattern: str) -> bool:

@@ -67,7 +67,10 @@ def test_exact_names_with_brackets_are_matched_before_globs(tmp_path):
         rec = read_recording(path, spec, require_temperature=True, usecols=usecols)
         assert rec.axis_names == ("Gyro X [dps]",)
         np.testing.assert_allclose(rec.temperature_c, frame["Temperatur [°C]"].to_numpy(), rtol=0, atol=1e-12)
-    assert recordings.matching_columns(["Temperatur C", "Temperatur °"], "Temperatur [°C]") == ["Temperatur C", "Temperatur °"]
+    from gyrocomp.columns import matching_columns  # the rule every reader (CSV, Parquet, flight logs) shares
+
+    assert matching_columns(["Temperatur C", "Temperatur °"], "Temperatur [°C]") == ["Temperatur C", "Temperatur °"]
+    assert matching_columns(["Temperatur [°C]", "Temperatur C"], "Temperatur [°C]") == ["Temperatur [°C]"]
 
 
 def test_accelerometer_axes_have_their_own_units(tmp_path):
