@@ -53,8 +53,8 @@ def error_rate(candidates, first_step, n_blocks, bic_margin, family_alpha, signa
 
     Examples
     --------
-    >>> round(float(stats.chi2.sf(np.log(720) + 10.0, 1)), 6)  # one parameter on 720 blocks
-    4.6e-05
+    >>> f"{float(stats.chi2.sf(np.log(720) + 10.0, 1)):.2e}"  # one parameter on 720 blocks
+    '4.67e-05'
     """
     per = {}
     for effect in candidates:

@@ -30,7 +30,7 @@ signature on the runs). Every move uses that one rule:
 
 For one deterministic parameter on 720 blocks the margin of 10 asks for a
 ``-2 log L`` drop of ``ln 720 + 10 = 16.6``: a false-alarm rate of
-``P(chi^2_1 > 16.6) = 4.6e-5`` per tried effect and move, at most about
+``P(chi^2_1 > 16.6) = 4.7e-5`` per tried effect and move, at most about
 ``4e-4`` over the eight candidates of a forward step (Bonferroni). For a
 noise term at the boundary of its range the null distribution is half a
 ``chi^2_1`` (Self & Liang 1987), so the rate is halved.
