@@ -22,7 +22,7 @@ import stat
 import sys
 import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, BinaryIO, Iterator, Mapping
+from typing import TYPE_CHECKING, Any, BinaryIO, Callable, Iterator, Mapping
 
 import numpy as np
 
@@ -35,6 +35,7 @@ if TYPE_CHECKING:
 __all__ = [
     "SCHEMA_VERSION",
     "file_sha256",
+    "file_sha256_started",
     "file_record",
     "write_table",
     "read_table",
@@ -72,6 +73,47 @@ def file_sha256(source: str | os.PathLike | bytes) -> str:
         return hashlib.sha256(source).hexdigest()
     with open_input(os.fspath(source)) as fh:
         return hashlib.file_digest(fh, "sha256").hexdigest()
+
+
+def file_sha256_started(path: str | os.PathLike) -> Callable[[], str]:
+    """:func:`file_sha256` of a file, computed on a thread while the caller goes on.
+
+    The file is opened at once, so a missing file, a folder or a device is
+    the same one-line :class:`InputError` as :func:`file_sha256` raises,
+    here. ``hashlib`` releases the GIL while it reads and hashes, so the
+    hash of a big recording runs beside its decoding where a second core is
+    free (SHA-256 in software takes about 3 ns a byte: 0.4-0.6 s of a 126 MB
+    file on this project's machine). The digest is the same.
+
+    Returns
+    -------
+    callable
+        Returns the hex digest, waiting for the thread when it has not
+        finished (and raises what the hashing raised).
+    """
+    import threading
+
+    stack = contextlib.ExitStack()
+    fh = stack.enter_context(open_input(os.fspath(path)))
+    box: list = []
+
+    def work() -> None:
+        with stack:
+            try:
+                box.append(hashlib.file_digest(fh, "sha256").hexdigest())
+            except BaseException as err:  # handed to the caller by digest()
+                box.append(err)
+
+    thread = threading.Thread(target=work, name=f"sha256 {Path(path).name}", daemon=True)
+    thread.start()
+
+    def digest() -> str:
+        thread.join()
+        if isinstance(box[0], BaseException):
+            raise box[0]
+        return box[0]
+
+    return digest
 
 
 def file_record(path: str | os.PathLike) -> dict:

@@ -76,6 +76,9 @@ class ChunkReader:
     breaks : list of int
         With ``gaps``: the samples (counted from the start) after a gap, each
         the first of a segment, found so far in this reading.
+    n_rows : int or None
+        Rows of a Parquet file, from its footer, once a reading has begun
+        (None for CSV): the most samples a reading can give.
     """
 
     def __init__(self, path, columns: ColumnSpec, *, rows: int, require_temperature: bool, usecols, jitter_tolerance: float, gaps: bool = False, first_rows: int | None = None):
@@ -92,16 +95,17 @@ class ChunkReader:
         self.fs_hz = None
         self.metadata = {}
         self.n_samples = 0
+        self.n_rows = None
         self._kind = recordings._kind(self.name)
         self._hash = hashlib.sha256()
-        self._sha256 = None if self.name == "-" else artefacts.file_sha256(self.name)
+        self._sha256 = None if self.name == "-" else artefacts.file_sha256_started(self.name)
         self._done = False
 
     @property
     def sha256(self) -> str:
-        """SHA-256 of the file's bytes (of standard input: once it has been read to the end)."""
+        """SHA-256 of the file's bytes, hashed on a thread from the start (of standard input: once it has been read to the end)."""
         if self._sha256 is not None:
-            return self._sha256
+            return self._sha256()
         if not self._done:
             raise RuntimeError("the SHA-256 of standard input is known once it has been read to the end")
         return self._hash.hexdigest()
@@ -169,6 +173,10 @@ class ChunkReader:
             raise InputError(f"{self.name}: has a header but no data rows")
         self._check_segments(where, first, ended=True)
         self._done = True
+        if self._kind == "parquet":  # the row groups' decoding buffers, which Arrow's allocator keeps for reuse
+            import pyarrow as pa
+
+            pa.default_memory_pool().release_unused()
         if self.breaks and not self._noted:  # the file's gaps, once however often it is read
             warnings.warn(f"{self.name}: {recordings.gap_note(len(self.breaks), longest)}", RecordingNote, stacklevel=2)
             self._noted = True
@@ -230,6 +238,7 @@ class ChunkReader:
         except (pa.ArrowInvalid, OSError) as err:
             raise InputError(f"{self.name}: not a readable Parquet file ({err})") from None
         self.metadata = artefacts.parquet_header(self.name, parquet.schema_arrow.metadata)
+        self.n_rows = parquet.metadata.num_rows
         keep = recordings.wanted_columns(self.columns, self.usecols)
         wanted = [c for c in parquet.schema_arrow.names if keep is None or keep(c)]
         for group in range(parquet.num_row_groups):

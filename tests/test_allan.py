@@ -386,6 +386,39 @@ def test_chunked_analysis_equals_the_whole_array(in_memory):
         assert chunked.terms[key]["value"] == pytest.approx(term["value"], rel=1e-9, abs=1e-15)
 
 
+@pytest.mark.parametrize("slots", [64, 2])
+def test_one_reading_gives_the_bits_of_two(monkeypatch, slots):
+    """analyse_segment_chunks told the most samples (a Parquet file's rows) reads its pieces once, into the phase, with the same bits.
+
+    Four segments (one of 2 samples, left out) in pieces that end at and
+    between the gaps; with 2 slots for 4 segments the store runs out and
+    the pieces are read twice more, as without `n_samples`.
+    """
+    from gyrocomp.allan import analysis
+
+    monkeypatch.setattr(analysis, "_SEGMENT_SLOTS", slots)
+    rng = np.random.default_rng(38)
+    segments = [0.1 + rng.normal(0.0, 0.01, n) + 1e-4 * np.cumsum(rng.normal(size=n)) for n in (70_001, 2, 5_000, 130_000)]
+    pieces = [(k, y[a:b]) for k, y in enumerate(segments) for a, b in zip([0, *range(1, len(y), 65_536)], [*range(1, len(y), 65_536), len(y)]) if b > a]
+    readings = []
+
+    def read():
+        readings.append(1)
+        return iter(pieces)
+
+    two = al.analyse_segment_chunks(read, 100.0, name="x")
+    readings.clear()
+    one = al.analyse_segment_chunks(read, 100.0, name="x", n_samples=sum(len(y) for y in segments))
+    assert len(readings) == (1 if slots == 64 else 3)  # else: the reading that ran out of room, then two
+    assert [s.name for s in one] == ["x segment 1", "x segment 3", "x segment 4"]
+    for a, b in zip(one, two, strict=True):
+        np.testing.assert_array_equal(a.adev, b.adev)
+        np.testing.assert_array_equal(a.alpha, b.alpha)
+        assert a.terms == b.terms
+    whole = al.analyse(segments[3], 100.0)
+    assert_allclose(one[2].adev, whole.adev, rtol=1e-12)
+
+
 def test_ieee952_model_reads_its_own_terms():
     """Each term alone gives its IEEE Std 952 line: N at 1 s, 0.664 B on the flat, K at 3 s ([4]_ Table C.1)."""
     from gyrocomp.allan import ieee952

@@ -112,7 +112,7 @@ def test_a_gapped_file_read_in_chunks_gives_each_segment_as_read_whole(tmp_path)
     bursts = _gapped_csv(path)
     reader = streaming.read_chunks(path, rows=97, gaps=True)
     with pytest.warns(Warning, match="4 segments: 3 gaps, the longest 100 s") as notes:
-        found = al.analyse_segment_chunks(lambda: _pieces(reader, lambda c: c.rate_dps), lambda: reader.fs_hz, name="gapped.csv")
+        found = al.analyse_segment_chunks(lambda: _pieces(reader, reader, lambda c: c.rate_dps), lambda: reader.fs_hz, name="gapped.csv")
     assert len(notes) == 1  # two readings, one note
     assert reader.breaks == [970, 1670, 1672]
     assert [s.name for s in found] == ["gapped.csv segment 1", "gapped.csv segment 2", "gapped.csv segment 4"]  # 2 samples: no deviation
@@ -146,4 +146,24 @@ def test_allan_reads_a_gapped_csv_as_a_gap_free_one_and_notes_once(tmp_path, mon
     reads = len(opened)
     opened.clear()
     assert CliRunner().invoke(app, ["allan", str(plain), "--out", str(tmp_path / "b.json")]).exit_code == 0
-    assert reads == len(opened) == 3  # the first chunk for the columns, then the mean and the phase
+    assert reads == len(opened) == 2  # the mean (its first chunk gives the columns), then the phase
+
+
+def test_allan_reads_a_parquet_file_once_with_the_bits_of_a_csv(tmp_path, monkeypatch):
+    """A Parquet file's phase fits in memory: one reading (issue 38), and the series of the same samples as CSV (two readings), bit for bit."""
+    import json
+
+    from gyrocomp import streaming
+
+    frame = pd.DataFrame({"time": np.arange(200_000) / 100.0, "rate": np.random.default_rng(38).normal(0.2, 0.05, 200_000)})
+    frame.to_parquet(tmp_path / "r.parquet", row_group_size=30_000)
+    frame.to_csv(tmp_path / "r.csv", index=False, float_format="%.17g")
+    opened = []
+    frames = streaming.ChunkReader._parquet_frames
+    monkeypatch.setattr(streaming.ChunkReader, "_parquet_frames", lambda self: (opened.append(self.name), frames(self))[1])
+    for name in ("r.parquet", "r.csv"):
+        assert CliRunner().invoke(app, ["allan", str(tmp_path / name), "--out", str(tmp_path / f"{name}.json")]).exit_code == 0
+    assert len(opened) == 1
+    parquet, csv = (json.loads((tmp_path / f"{name}.json").read_text())["series"][0] for name in ("r.parquet", "r.csv"))
+    assert parquet.pop("name") == "r.parquet" and csv.pop("name") == "r.csv"
+    assert parquet == csv

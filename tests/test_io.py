@@ -62,6 +62,23 @@ def test_sha256_is_of_the_file_bytes(tmp_path):
     assert rec.input_record() == {"name": "r.csv", "sha256": rec.sha256}
 
 
+def test_sha256_on_a_thread_is_the_file_sha256(tmp_path):
+    """The streamed reader's hash, computed beside the reading, is :func:`file_sha256`; a missing file is refused at once."""
+    import hashlib
+
+    from gyrocomp import streaming
+
+    path = tmp_path / "r.parquet"
+    pd.DataFrame({"time": np.arange(3000) / 10.0, "rate": np.random.default_rng(5).normal(size=3000)}).to_parquet(path)
+    digest = artefacts.file_sha256_started(path)
+    assert digest() == hashlib.sha256(path.read_bytes()).hexdigest() == artefacts.file_sha256(path)
+    reader = streaming.read_chunks(path, rows=1000)
+    assert sum(len(c.time_s) for c in reader) == 3000 == reader.n_rows
+    assert reader.input_record() == {"name": "r.parquet", "sha256": artefacts.file_sha256(path)}
+    with pytest.raises(InputError, match="no such file"):
+        artefacts.file_sha256_started(tmp_path / "gone.parquet")
+
+
 @pytest.mark.parametrize(
     "text, expected",
     [

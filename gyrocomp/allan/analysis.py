@@ -19,7 +19,7 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from gyrocomp.allan.deviation import Phase, _phase, averaging_factors, check_fs, integrate, second_difference_sums
+from gyrocomp.allan.deviation import Phase, _phase, averaging_factors, check_fs, integrate, integrate_stored, second_difference_sums
 from gyrocomp.allan.fit import add_readoffs, fit_terms
 from gyrocomp.allan.noise_id import chi2_interval, edf_oadev, noise_id
 from gyrocomp.errors import InputError, ThresholdError
@@ -301,8 +301,9 @@ def analyse_segment_chunks(
     column: str = "rate",
     settings: AllanConfig = AllanConfig(),
     folder: str | None = None,
+    n_samples: int | None = None,
 ) -> list[AllanSeries]:
-    """:func:`analyse_chunks` of a series with gaps: each gap-free segment a series of its own, in two readings.
+    """:func:`analyse_chunks` of a series with gaps: each gap-free segment a series of its own, in one or two readings.
 
     Parameters
     ----------
@@ -310,11 +311,20 @@ def analyse_segment_chunks(
         Each call reads the series again from its start, as consecutive
         pieces ``(segment, samples)`` [deg/s]: the segment's index (0, 1,
         ...; increasing, a segment's pieces together) and samples of that
-        segment alone, so that no piece spans a gap. Called twice.
+        segment alone, so that no piece spans a gap. Called twice, or once
+        (see `n_samples`).
     fs_hz, taus, column, settings, folder
         As :func:`analyse_chunks`.
     name : str
         The series' name; with several segments, ``<name> segment <k>`` (k from 1).
+    n_samples : int, optional
+        The most samples a reading can give (a Parquet file's row count).
+        When their phase fits in memory (``settings.max_phase_in_memory``),
+        `pieces` is read once: each sample is kept where its phase value
+        will be, and integrated there once its segment's mean is known
+        (:func:`~gyrocomp.allan.deviation.integrate_stored`, the same bits
+        as a second reading). A series of more than
+        :data:`_SEGMENT_SLOTS` segments is then read a second time.
 
     Returns
     -------
@@ -323,34 +333,71 @@ def analyse_segment_chunks(
         rounding; with several segments, those of fewer than 3 samples are
         left out (no deviation), as the whole-file reading leaves them out.
     """
+    store = None
+    if n_samples is not None and n_samples <= settings.max_phase_in_memory:
+        store = np.empty(n_samples + _SEGMENT_SLOTS)
+        sums = _segment_sums(pieces(), store)
+        if sums is None:  # more segments than slots: read twice
+            store = None
+    if store is None:
+        sums = _segment_sums(pieces())
+    seen = sum(n for _, n, _ in sums.values())
+    if len(sums) <= 1 and seen < 3:
+        raise InputError(f"Allan deviation needs at least 3 samples, got {seen}")
+    fs_hz = check_fs(fs_hz() if callable(fs_hz) else fs_hz)
+    labels = {k: name if len(sums) == 1 else f"{name} segment {k + 1}" for k in sums}
+    if store is not None:
+        return [
+            _series(integrate_stored(store[at : at + n + 1], total / n), fs_hz, taus, labels[k], column, settings)
+            for k, (total, n, at) in sums.items()
+            if n >= 3  # only with several segments (checked above)
+        ]
+    out = []
+    for k, group in itertools.groupby(pieces(), key=lambda piece: piece[0]):
+        total, n, _ = sums[k]
+        if n < 3:  # only with several segments (checked above)
+            continue
+        values = (y for _, y in group)
+        phase = integrate(values, total / n, n, in_memory=n <= settings.max_phase_in_memory, folder=folder)
+        try:
+            out.append(_series(phase, fs_hz, taus, labels[k], column, settings))
+        finally:
+            phase.close()
+    return out
+
+
+_SEGMENT_SLOTS = 64
+"""Places beyond the samples in a one-reading store: x_0 of each segment's phase (a segment per gap)."""
+
+
+def _segment_sums(pieces: Iterable[tuple[int, np.ndarray]], store: np.ndarray | None = None) -> dict | None:
+    """``{segment: [sum, count, place]}`` of `pieces`, every sample checked finite.
+
+    With `store`, segment k's samples are copied to ``store[place + 1 :
+    place + 1 + count]`` (``store[place]`` is left for its x_0, the
+    segments one after the other); None when they do not fit.
+    """
     sums: dict[int, list] = {}
-    seen = 0
-    for k, y in pieces():
+    seen = at = 0
+    for k, y in pieces:
         y = np.asarray(y, dtype=float)
         part = float(y.sum())
         if not math.isfinite(part):
             i = int(np.flatnonzero(~np.isfinite(y))[0])
             raise InputError(f"rate sample {seen + i} is {y[i]!r}; the Allan deviation needs finite values")
-        entry = sums.setdefault(k, [0.0, 0])
+        entry = sums.get(k)
+        if entry is None:
+            entry = sums[k] = [0.0, 0, at]
+            at += 1
+        if store is not None:
+            if at + len(y) > len(store):
+                return None
+            store[at : at + len(y)] = y
+        at += len(y)
         entry[0] += part
         entry[1] += len(y)
         seen += len(y)
-    if len(sums) <= 1 and seen < 3:
-        raise InputError(f"Allan deviation needs at least 3 samples, got {seen}")
-    fs_hz = check_fs(fs_hz() if callable(fs_hz) else fs_hz)
-    out = []
-    for k, group in itertools.groupby(pieces(), key=lambda piece: piece[0]):
-        total, n_samples = sums[k]
-        if n_samples < 3:  # only with several segments (checked above)
-            continue
-        label = name if len(sums) == 1 else f"{name} segment {k + 1}"
-        values = (y for _, y in group)
-        phase = integrate(values, total / n_samples, n_samples, in_memory=n_samples <= settings.max_phase_in_memory, folder=folder)
-        try:
-            out.append(_series(phase, fs_hz, taus, label, column, settings))
-        finally:
-            phase.close()
-    return out
+    return sums
 
 
 def _series(phase: Phase, fs_hz: float, taus, name: str, column: str, settings: AllanConfig) -> AllanSeries:

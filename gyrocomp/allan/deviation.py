@@ -28,7 +28,7 @@ import numpy as np
 
 from gyrocomp.errors import InputError
 
-__all__ = ["Phase", "oadev", "integrate", "averaging_factors", "second_difference_sums", "check_fs"]
+__all__ = ["Phase", "oadev", "integrate", "integrate_stored", "averaging_factors", "second_difference_sums", "check_fs"]
 
 _CHUNK = 1 << 16
 """Samples per chunk of the second-difference sums (512 KiB: with its lag buffer, about an L2 cache)."""
@@ -179,6 +179,25 @@ def integrate(chunks: Iterable[np.ndarray], mean: float, n_samples: int, *, in_m
         return Phase(path=path)
     finally:
         os.remove(path)  # the open descriptor keeps the data until the phase is closed
+
+def integrate_stored(values: np.ndarray, mean: float) -> Phase:
+    """The phase of rate samples kept in ``values[1:]``, computed in place: the bits of :func:`integrate` in memory.
+
+    Parameters
+    ----------
+    values : ndarray of float64, shape (n_samples + 1,)
+        The samples from index 1; overwritten with x_0 = 0 and
+        ``x_{i+1} = sum_{k<=i} (y_k - mean)``.
+    mean : float
+        The samples' mean.
+    """
+    values[0] = 0.0
+    rest = values[1:]
+    np.subtract(rest, mean, out=rest)
+    rest[0] += values[0]
+    np.cumsum(rest, out=rest)
+    return Phase(values)
+
 
 def check_fs(fs_hz) -> float:
     fs = float(fs_hz)

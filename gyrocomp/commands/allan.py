@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import os
 from pathlib import Path
@@ -78,7 +79,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     Each recording is read (:func:`gyrocomp.recordings.read_recording`),
     each of its axes (or ``options.column``) analysed
     (:func:`gyrocomp.allan.analyse`) as one series named after the file,
-    or, for a CSV or Parquet file, read chunk by chunk, twice per series
+    or, for a CSV or Parquet file, read chunk by chunk, twice per series (a Parquet file's phase that fits in memory: once)
     (:func:`gyrocomp.streaming.read_chunks`, :func:`gyrocomp.allan.analyse_segment_chunks`),
     so that a recording bigger than memory is fine (standard input, flight
     logs, time units other than seconds and `resample` read it whole);
@@ -176,7 +177,12 @@ def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, li
 
     column = options.column
     reader = streaming.read_chunks(path, options.columns, usecols=usecols, gaps=True)
-    head = next(iter(reader))  # the axes and columns, from the first chunk
+    reading = iter(reader)
+    head = next(reading)  # the axes and columns, from the first chunk of the first reading, which goes on
+    first = [itertools.chain([head], reading)]
+
+    def chunks():
+        return first.pop() if first else iter(reader)
     if column == "rate":
         values = {axis.name: ((lambda chunk, name=axis.name: chunk.axis(name).rate_dps), axis.unit) for axis in head.axes}
     elif column in head.columns:
@@ -188,24 +194,25 @@ def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, li
     warm = head.temperature_c is not None
     for name, (pick, unit) in values.items():
         if options.detrend_temperature:
-            cubic = _cubic(lambda pick=pick: _with_temperature(reader, pick), label, warm)
+            cubic = _cubic(lambda pick=pick: _with_temperature(reader, chunks(), pick), label, warm)
             pick = (lambda chunk, pick=pick, cubic=cubic: pick(chunk) - cubic(chunk.temperature_c))
         found = al.analyse_segment_chunks(
-            lambda: _pieces(reader, pick), lambda: reader.fs_hz, taus=options.taus, name=label, column=name, settings=settings
+            lambda: _pieces(reader, chunks(), pick), lambda: reader.fs_hz, taus=options.taus, name=label, column=name, settings=settings,
+            n_samples=reader.n_rows,
         )
         pooled = _pool(found, label, unit, settings)
         if warm:
-            _judge(pooled, lambda pick=pick: _with_temperature(reader, pick), settings, options.detrend_temperature)
+            _judge(pooled, lambda pick=pick: _with_temperature(reader, chunks(), pick), settings, options.detrend_temperature)
         series += [pooled, *found] if options.segments and len(found) > 1 else [pooled]
         curves.append((pooled, unit))
     return series, curves, reader.input_record()
 
 
-def _with_temperature(reader, pick) -> Iterator[tuple[int, "np.ndarray", "np.ndarray"]]:
-    """``(segment, rate, temperature)`` of each piece of `reader` (:func:`_pieces`): what :mod:`gyrocomp.allan.thermal` reads."""
+def _with_temperature(reader, chunks, pick) -> Iterator[tuple[int, "np.ndarray", "np.ndarray"]]:
+    """``(segment, rate, temperature)`` of each piece of a reading of `reader` (:func:`_pieces`): what :mod:`gyrocomp.allan.thermal` reads."""
     import numpy as np
 
-    for k, both in _pieces(reader, lambda chunk: np.column_stack([pick(chunk), chunk.temperature_c])):
+    for k, both in _pieces(reader, chunks, lambda chunk: np.column_stack([pick(chunk), chunk.temperature_c])):
         yield k, both[:, 0], both[:, 1]
 
 
@@ -240,11 +247,11 @@ def _pool(found: list, label: str, unit: str, settings):
     return pooled
 
 
-def _pieces(reader, pick) -> Iterator[tuple[int, "np.ndarray"]]:
-    """``(segment, samples)`` of each chunk of `reader`, cut at its gaps: what :func:`gyrocomp.allan.analyse_segment_chunks` reads."""
+def _pieces(reader, chunks, pick) -> Iterator[tuple[int, "np.ndarray"]]:
+    """``(segment, samples)`` of each chunk of a reading `chunks` of `reader`, cut at its gaps: what :func:`gyrocomp.allan.analyse_segment_chunks` reads."""
     import bisect
 
-    for chunk in reader:
+    for chunk in chunks:
         y = pick(chunk)
         stop = reader.n_samples
         start = stop - len(y)
