@@ -3,7 +3,7 @@
 Both read the same 10^7-sample Parquet recording (100 Hz, white + random-walk
 rate) and compute the octave overlapping Allan deviation; gyrocomp also
 identifies the noise, computes confidence intervals, fits the IEEE terms and
-writes allan.json. The two commands alternate `REPEATS` times; the figures
+writes allan.json. The two commands alternate `REPEATS` times (5: other agents share the 2 cores); the figures
 are the ratios of median wall times, of median CPU times (user + system of
 the child, less sensitive to other load) and of peak resident memory
 (``/usr/bin/time -v``). Timings are noisy while other jobs share the CPU.
@@ -27,7 +27,7 @@ HERE = Path(__file__).resolve().parent
 DATA = HERE / "_data" / "allan_1e7.parquet"
 N_SAMPLES = 10**7
 FS_HZ = 100.0
-REPEATS = 3
+REPEATS = 5
 SEED = 20240601
 
 ALLANTOOLS_SCRIPT = """
