@@ -64,11 +64,6 @@ KERNELS = {
         "from gyrocomp import entropy, _pair_count",
         "entropy.sample_entropy(np.random.default_rng(0).standard_normal(6000))",
     ),
-    "anfis forward (causal compensation)": (
-        "from gyrocomp.models import anfis, _anfis_compiled",
-        "anfis._predict(np.random.default_rng(0).standard_normal((50, 2)), "
-        "[np.array([[1.0, 2.0, -1.0], [1.0, 2.0, 1.0]])] * 2, np.ones((4, 3)), 'gbell')",
-    ),
 }
 
 KERNEL_TIMER = """

@@ -41,7 +41,15 @@ _MIN_WIDTH = 1e-6
 _MIN_SLOPE = 1e-2
 """Floor of the gbell slope b (keeps the membership function bell-shaped)."""
 _TINY = 1e-300
-"""Stands in for |u| = 0 inside the logarithm of the gbell derivative."""
+"""Stands in for |u| = 0 inside the logarithm of the gbell membership and its derivative."""
+PREDICT_BLOCK = 1 << 14
+"""Rows :func:`_predict` evaluates at once: its arrays of that many rows (128 KiB each) stay in the L2 cache."""
+SHIFT_ABOVE = 600.0
+"""Smallest exponent s (or q) of an input's largest membership from which nu comes from shifted logarithms."""
+FAR_TOTAL = 1e-200
+"""A row whose memberships of an input sum below this is checked for the shifted path (> n_mfs exp(-SHIFT_ABOVE))."""
+_EXP_ARG = 708.0
+"""Exponents are held in +-_EXP_ARG before exp: exp(708) = 3e307 stays finite, so no membership is exactly 0."""
 
 
 class ANFIS(Learner):
@@ -380,25 +388,99 @@ def _normalised_firing(log_mu: list[np.ndarray]) -> np.ndarray:
 
 
 def _predict(Z: np.ndarray, premises: list[np.ndarray], consequents: np.ndarray, mf: str) -> np.ndarray:
-    """sum_r wbar_r (c_r . z + c_r0) for each row of `Z` ([2] eq. (25)), by the compiled kernel.
+    """sum_r wbar_r (c_r . z + c_r0) for each row of `Z` ([2] eq. (25)), `PREDICT_BLOCK` rows at a time.
 
-    The same output as ``_normalised_firing`` of ``_log_mu`` and the rule
-    outputs in NumPy, to rounding, without their (n, n_rules) temporaries
-    (:mod:`gyrocomp.models._anfis_compiled`).
+    The normalised firing strength of the grid partition factorises ([2]
+    eqs. (23)-(24)):
+
+        wbar_r = prod_j mu_j,k_j / sum_r prod_j mu_j,k_j = prod_j nu_j,k_j,
+        nu_j,k = mu_j,k / sum_k mu_j,k,
+
+    so each membership function is evaluated once per row (12 for the
+    4 x 4 + 2 x 2 rules of PE-LCD-ANFIS, not once per rule) and each input
+    normalised over its own functions (:func:`_memberships`); the rules,
+    the last input's function varying fastest, are summed in order. The
+    same output as ``_normalised_firing`` of ``_log_mu`` and the rule
+    outputs, to rounding, without their (n, n_rules) temporaries. Every
+    step is element-wise along the rows, so each row gets the same bits
+    wherever it falls in `Z` (chunked and one-shot evaluations agree).
     """
-    from gyrocomp.models._anfis_compiled import forward
+    Z = np.asarray(Z, dtype=float)
+    n, n_in = Z.shape
+    n_mfs = [len(p) for p in premises]
+    digits = np.array(np.unravel_index(np.arange(len(consequents)), n_mfs)).T  # rule r's function of each input
+    rows = min(n, PREDICT_BLOCK)
+    scratch = [np.empty((3, m, rows)) for m in n_mfs]  # each input's exponents, memberships and totals
+    wbar, rule, term = np.empty(rows), np.empty(rows), np.empty(rows)
+    out = np.empty(n)
+    for start in range(0, n, rows):
+        z = Z[start : start + rows]
+        size = len(z)
+        nu = [_memberships(z[:, j], p, mf, scratch[j][..., :size]) for j, p in enumerate(premises)]
+        block = out[start : start + size]
+        block[:] = 0.0
+        w, r, t = wbar[:size], rule[:size], term[:size]
+        for digit, c in zip(digits, consequents):
+            np.copyto(w, nu[0][digit[0]])
+            for j in range(1, n_in):
+                w *= nu[j][digit[j]]
+            np.multiply(z[:, 0], c[0], out=r)
+            r += c[n_in]
+            for j in range(1, n_in):
+                np.multiply(z[:, j], c[j], out=t)
+                r += t
+            w *= r
+            block += w
+    return out
 
+
+def _memberships(z: np.ndarray, p: np.ndarray, mf: str, scratch: np.ndarray) -> np.ndarray:
+    """nu_k = mu_k / sum_k mu_k of one input's membership functions, shape (n_mfs, n_samples), in `scratch`.
+
+    ``gbell``: mu = 1 / (1 + exp(s)), s = 2 b log|u|, u = (z - c) / a
+    (|u| held in [`_TINY`, 1 / `_TINY`]); ``gauss``: mu = exp(-q),
+    q = u^2 / 2, u = (z - c) / sigma. Where every membership of the input is
+    below exp(-`SHIFT_ABOVE`) (an input far outside the training range,
+    never after clamping), nu comes from the shifted exponents,
+    exp(s_min - s_k), as ``_normalised_firing`` does with its row maximum.
+    `scratch` (3, n_mfs, n_samples) holds the exponents, nu and the totals
+    (reused from block to block: fresh arrays cost a page fault per 4 KiB).
+    """
     gbell = mf == "gbell"
-    stacked = np.concatenate(premises)
-    centre, width = (stacked[:, 2], stacked[:, 0]) if gbell else (stacked[:, 0], stacked[:, 1])
-    slope = stacked[:, 1] if gbell else np.zeros(len(stacked))
-    n_mfs = np.array([len(p) for p in premises], dtype=np.int64)
-    first = np.concatenate([[0], np.cumsum(n_mfs)[:-1]]).astype(np.int64)
-    Zt = np.ascontiguousarray(np.asarray(Z, dtype=float).T)  # no copy for Fortran-ordered Z (scaled_columns)
-    return forward(
-        Zt, np.ascontiguousarray(centre), np.ascontiguousarray(width), np.ascontiguousarray(slope), first, n_mfs,
-        np.ascontiguousarray(consequents, dtype=float), gbell, np.empty(len(Z)),
-    )
+    centre, width = (p[:, 2], p[:, 0]) if gbell else (p[:, 0], p[:, 1])
+    exponent, nu, total = scratch[0], scratch[1], scratch[2, 0]
+    total[:] = 0.0
+    for k, (e, mu) in enumerate(zip(exponent, nu)):
+        np.subtract(z, centre[k], out=e)
+        e *= 1.0 / width[k]
+        if gbell:
+            np.abs(e, out=e)
+            np.clip(e, _TINY, 1.0 / _TINY, out=e)
+            np.log(e, out=e)
+            e *= 2.0 * p[k, 1]
+            np.clip(e, -_EXP_ARG, _EXP_ARG, out=mu)
+            np.exp(mu, out=mu)
+            mu += 1.0
+            np.divide(1.0, mu, out=mu)
+        else:
+            np.multiply(e, e, out=e)
+            e *= 0.5
+            np.clip(e, -_EXP_ARG, _EXP_ARG, out=mu)
+            np.negative(mu, out=mu)
+            np.exp(mu, out=mu)
+        total += mu
+    far = np.flatnonzero(total < FAR_TOTAL)
+    if far.size:
+        smallest = exponent[:, far].min(axis=0)
+        far, smallest = far[smallest >= SHIFT_ABOVE], smallest[smallest >= SHIFT_ABOVE]
+        shifted = np.exp(np.clip(smallest - exponent[:, far], -_EXP_ARG, _EXP_ARG))
+        nu[:, far] = shifted
+        total[far] = 0.0
+        for row in shifted:
+            total[far] += row
+    np.divide(1.0, total, out=total)
+    nu *= total
+    return nu
 
 
 def _premise_gradients(

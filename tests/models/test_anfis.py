@@ -101,8 +101,8 @@ def test_premise_gradient_matches_finite_differences(mf):
 
 
 @pytest.mark.parametrize("mf", ["gbell", "gauss"])
-def test_compiled_forward_is_the_rule_grid_of_the_paper(mf):
-    """_predict (numba) against [2] eqs. (18), (23)-(25) written out rule by rule, 3 inputs with 3 x 2 x 4 MFs.
+def test_forward_is_the_rule_grid_of_the_paper(mf):
+    """_predict against [2] eqs. (18), (23)-(25) written out rule by rule, 3 inputs with 3 x 2 x 4 MFs.
 
     Inside the unit box against the plain products mu_1 mu_2 mu_3 / sum (1e-12);
     far outside (memberships below 1e-300, where the plain products underflow)
@@ -139,8 +139,8 @@ def test_compiled_forward_is_the_rule_grid_of_the_paper(mf):
 
 
 @pytest.mark.parametrize("mf", ["gbell", "gauss"])
-def test_compiled_forward_equals_numpy_path_on_random_inputs(mf):
-    """_predict (numba, its own exp and log) against the log-domain NumPy path of training, 4 x 4 and 2 x 3 x 2 MFs.
+def test_forward_equals_the_log_domain_path_on_random_inputs(mf):
+    """_predict (memberships per input, the rules summed input by input) against the log-domain NumPy path of training, 4 x 4 and 2 x 3 x 2 MFs.
 
     Random premises around the initial grid, random consequents, inputs
     over [-1, 2] (inside and well outside the unit box): equal to 1e-12 of
@@ -158,8 +158,9 @@ def test_compiled_forward_equals_numpy_path_on_random_inputs(mf):
         assert_allclose(got, numpy_path, rtol=0, atol=1e-12 * np.max(np.abs(numpy_path)))
 
 
-def test_compiled_forward_gives_each_row_the_same_bits_wherever_it_falls():
-    """A row's output does not depend on the rows around it: vector body, scalar tail and block edges agree bit for bit."""
+def test_forward_gives_each_row_the_same_bits_wherever_it_falls(monkeypatch):
+    """A row's output does not depend on the rows around it: block edges (blocks of 256 rows here), offsets and order agree bit for bit."""
+    monkeypatch.setattr(anfis_module, "PREDICT_BLOCK", 256)
     rng = np.random.default_rng(3)
     premises = [anfis_module._initial_premises(m, "gbell") + rng.normal(0, 0.02, (m, 3)) for m in (4, 2)]
     consequents = rng.normal(size=(8, 3))
@@ -168,25 +169,31 @@ def test_compiled_forward_gives_each_row_the_same_bits_wherever_it_falls():
     for start in (1, 2, 3, 255, 257):
         part = anfis_module._predict(Z[start:], premises, consequents, "gbell")
         np.testing.assert_array_equal(part, whole[start:])
+    for start, size in ((0, 1), (5, 2), (999, 1), (700, 3)):  # blocks of a few rows
+        np.testing.assert_array_equal(anfis_module._predict(Z[start : start + size], premises, consequents, "gbell"), whole[start : start + size])
     np.testing.assert_array_equal(anfis_module._predict(Z[::-1], premises, consequents, "gbell"), whole[::-1])
+    np.testing.assert_array_equal(anfis_module._predict(np.asfortranarray(Z), premises, consequents, "gbell"), whole)
 
 
-def test_compiled_exp_and_log_within_one_ulp_of_libm():
-    """The kernel's vectorisable exp and log against NumPy's (libm) over their whole range, and at the edges."""
-    from gyrocomp.models._anfis_compiled import _exp, _log
+def test_forward_equals_the_compiled_kernel_it_replaced():
+    """The outputs of the numba kernel of 7aa942e (fdlibm exp and log, rule by rule) on the PE-LCD-ANFIS drift premises: to 1e-12 of the scale.
 
-    rng = np.random.default_rng(5)
-    x = np.concatenate([rng.uniform(-708.0, 708.0, 3000), rng.uniform(-1.0, 1.0, 3000), [0.0, -708.0, 708.0, 1e-300, -1e-300]])
-    got = np.array([_exp(v) for v in x])
-    assert_allclose(got, np.exp(x), rtol=2.3e-16, atol=0)
-    assert _exp(1000.0) == _exp(708.0) and _exp(-1000.0) == _exp(-708.0) > 0
-    y = np.concatenate([
-        np.exp(rng.uniform(-690.0, 690.0, 3000)), rng.uniform(0.5, 2.0, 3000),
-        [1e-300, 1e300, 1.0, 2.0, 0.5, np.sqrt(2.0), np.nextafter(np.sqrt(2.0), 0), np.nextafter(1.0, 2), np.nextafter(1.0, 0)],
-    ])
-    got = np.array([_log(v) for v in y])
-    assert_allclose(got, np.log(y), rtol=2.3e-16, atol=1e-300)
-    assert _log(1.0) == 0.0
+    Premises and consequents of ``benchmarks/_data/model_pe-lcd-anfis.json``'s
+    drift segment (rounded to 4 digits), inputs on a grid over the unit box
+    and beyond it; the expected values were printed by that kernel.
+    """
+    premises = [
+        np.array([[0.2547, 1.9993, 0.0346], [0.1561, 2.0212, 0.2480], [0.1825, 2.0123, 0.7462], [0.2961, 1.9907, 0.9556]]),
+        np.array([[0.1667, 2.0, 0.0], [0.1667, 2.0, 0.3333], [0.1667, 2.0, 0.6667], [0.1667, 2.0, 1.0]]),
+    ]
+    consequents = np.linspace(-2.0, 2.0, 48).reshape(16, 3) ** 3
+    Z = np.array([[-0.5, -0.5], [0.0, 0.0], [0.1, 0.9], [0.37, 0.52], [0.5, 0.5], [0.99, 0.01], [1.0, 1.0], [1.7, -0.3], [40.0, -25.0]])
+    expected = [
+        1.2473032423040988, -5.264921020455645, -1.9366301854558394, -1.1168318485931823, 1.0808124236570487,
+        2.576325723862507, 17.345628831362248, 3.0948802163243387, -1.8718774423132274,
+    ]
+    got = anfis_module._predict(Z, premises, consequents, "gbell")
+    assert_allclose(got, expected, rtol=0, atol=1e-12 * np.max(np.abs(expected)))
 
 
 def test_jang_step_size_rules():
