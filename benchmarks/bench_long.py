@@ -127,7 +127,7 @@ def part_compensate() -> dict:
         "repeats": REPEATS,
         "load_average_1min_at_end": os.getloadavg()[0],
         "threads": {k: os.environ.get(k) for k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")},
-        "anfis_kernel_threads": 1,  # numba njit without parallel: one thread whatever NUMBA_NUM_THREADS
+        "anfis_kernel_threads": 1,  # the NumPy forward pass (issue 38; a numba njit kernel before): one thread
         "wall_s": {k: v[0] for k, v in med.items()},
         "cpu_s": {k: v[1] for k, v in med.items()},
         "polynomial_over_allan_wall": med["polynomial"][0] / med["allan"][0],
