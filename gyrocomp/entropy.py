@@ -24,7 +24,7 @@ import numpy as np
 
 from gyrocomp.errors import InputError
 
-__all__ = ["permutation_entropy", "sample_entropy"]
+__all__ = ["permutation_entropy", "permutation_entropy_blocks", "sample_entropy"]
 
 _BINCOUNT_BITS = 22
 """Longest pattern code (bits) counted with ``np.bincount``; beyond it ``np.unique``."""
@@ -103,6 +103,46 @@ def permutation_entropy(x, order=3, delay=1, normalize=True):
             f"permutation_entropy: {x.size} samples, order {order} with delay {delay} "
             f"needs at least {(order - 1) * delay + 1}"
         )
+    return _entropy_of_counts(_pattern_counts(x, order, delay, n_windows), n_windows, order, normalize)
+
+
+def permutation_entropy_blocks(read, n_samples: int, order=3, delay=1, normalize=True, block: int = 1 << 18) -> float:
+    """:func:`permutation_entropy` of a signal read `block` windows at a time.
+
+    Parameters
+    ----------
+    read : callable(lo, hi) -> ndarray
+        Samples ``lo .. hi - 1`` of the signal (a component on disk).
+    n_samples : int
+    order, delay, normalize
+        As :func:`permutation_entropy`.
+    block : int
+        Windows (ordinal patterns) coded at a time; each read holds
+        ``(order - 1) * delay`` samples more.
+
+    Returns
+    -------
+    float
+        The same value as :func:`permutation_entropy` of the whole signal:
+        the pattern counts are integers summed over the blocks, so the
+        entropy is computed from the same counts in the same order.
+    """
+    order = _check_int(order, "order", 2)
+    delay = _check_int(delay, "delay", 1)
+    span = (order - 1) * delay
+    n_windows = n_samples - span
+    if n_windows < 1:
+        raise InputError(f"permutation_entropy: {n_samples} samples, order {order} with delay {delay} needs at least {span + 1}")
+    total = None
+    for lo in range(0, n_windows, block):
+        hi = min(n_windows, lo + block)
+        counts = _pattern_counts(_check_signal(read(lo, hi + span), "x"), order, delay, hi - lo)
+        total = counts if total is None else _merge_counts(total, counts)
+    return _entropy_of_counts(total, n_windows, order, normalize)
+
+
+def _pattern_counts(x: np.ndarray, order: int, delay: int, n_windows: int) -> tuple[np.ndarray, np.ndarray]:
+    """The codes seen in the first `n_windows` windows of `x` and their counts, by code (Notes of :func:`permutation_entropy`)."""
     columns = [x[k * delay : k * delay + n_windows] for k in range(order)]
     n_bits = order * (order - 1) // 2
     code = np.zeros(n_windows, dtype=np.min_scalar_type((1 << n_bits) - 1))
@@ -115,10 +155,20 @@ def permutation_entropy(x, order=3, delay=1, normalize=True):
             bit += 1
     if n_bits <= _BINCOUNT_BITS:
         counts = np.bincount(code, minlength=1 << n_bits)
-        counts = counts[counts > 0]
-    else:
-        counts = np.unique(code, return_counts=True)[1]
-    p = counts / n_windows
+        seen = np.flatnonzero(counts)
+        return seen, counts[seen]
+    return np.unique(code, return_counts=True)
+
+
+def _merge_counts(a: tuple, b: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """Counts by code of two sets of windows together."""
+    codes, where = np.unique(np.concatenate((a[0], b[0])), return_inverse=True)
+    return codes, np.bincount(where, weights=np.concatenate((a[1], b[1])), minlength=codes.size).astype(np.int64)
+
+
+def _entropy_of_counts(counts: tuple, n_windows: int, order: int, normalize: bool) -> float:
+    """Shannon entropy [nats] of the pattern counts (in code order), divided by ln(b!) when `normalize`."""
+    p = counts[1] / n_windows
     h = float(-np.sum(p * np.log(p)))
     if normalize:
         h /= math.log(math.factorial(order))

@@ -174,3 +174,15 @@ def test_agrees_with_entropyhub():
     r = 0.2 * np.std(x)
     samp, _, _ = eh.SampEn(x, m=3, r=r)
     assert_allclose(_sample_entropy_vector(x, 3, r), samp, atol=1e-9)
+
+
+def test_permutation_entropy_in_blocks_equals_the_whole_signal():
+    """Issue 38: a component on disk is counted a block of windows at a time, the same counts."""
+    from gyrocomp.entropy import permutation_entropy, permutation_entropy_blocks
+
+    rng = np.random.default_rng(8)
+    x = np.round(rng.standard_normal(5000).cumsum(), 0)  # ties, ordered by position
+    for order, delay, block in ((6, 1, 1000), (3, 4, 777), (8, 1, 999)):  # 8: 28-bit codes, counted by np.unique
+        whole = permutation_entropy(x, order, delay)
+        assert permutation_entropy_blocks(lambda lo, hi: x[lo:hi], x.size, order, delay, block=block) == whole
+    assert permutation_entropy_blocks(lambda lo, hi: x[lo:hi], x.size, 4, 1, normalize=False, block=64) == permutation_entropy(x, 4, 1, normalize=False)

@@ -116,7 +116,7 @@ def to_files(
             runs = [rec.axis(axis if len(fit_rec.axes) > 1 else None) for rec in [fit_rec] + hold_recs[:-1]]
             trained, unit, left_out[axis] = greybox_of(body, runs)
             models.update(trained), units.update(unit)
-        from gyrocomp.pipeline.train import model_file
+        from gyrocomp.pipeline.model_file import model_file
 
         artefacts.write_json(options.model_out, model_file(models, units))
         for axis, body in bodies.items():

@@ -40,7 +40,8 @@ from gyrocomp.pipeline import evaluate
 from gyrocomp.pipeline.compensate import compensate, load_model
 from gyrocomp.pipeline.settings import EvaluateSettings, RunSettings, SignalSettings, pipeline_settings
 from gyrocomp.artefacts import file_record
-from gyrocomp.pipeline.train import model_file, train_direct, train_parallel
+from gyrocomp.pipeline.model_file import model_file
+from gyrocomp.pipeline.train import train_direct, train_parallel
 
 __all__ = ["REPORT_SCHEMA", "Options", "to_files", "load_run_config", "decompose_and_classify"]
 

@@ -82,7 +82,7 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
         classes.json]`` for a parallel pipeline (one axis, or several:
         :func:`gyrocomp.commands.decompose.write_axes`).
     out : path-like
-        ``model.json`` to write (:func:`gyrocomp.pipeline.train.model_file`:
+        ``model.json`` to write (:func:`gyrocomp.pipeline.model_file.model_file`:
         a model per axis under ``axes``, named after the axes' columns).
     options : Options
 
@@ -96,7 +96,8 @@ def to_files(inputs: Sequence[str | os.PathLike], out: str | os.PathLike, option
     from gyrocomp.errors import InputError
     from gyrocomp.pipeline.settings import pipeline_settings, rate_settings
     from gyrocomp.artefacts import file_record
-    from gyrocomp.pipeline.train import model_file, train_parallel
+    from gyrocomp.pipeline.model_file import model_file
+    from gyrocomp.pipeline.train import train_parallel
 
     from gyrocomp.pipeline import coverage
 
@@ -246,7 +247,11 @@ def train_axes(recording, config: dict, *, source: str, seed: int | None, worker
     :func:`gyrocomp.pipeline.train.train_direct` over its gap-free segments,
     or decomposed, classified and :func:`~gyrocomp.pipeline.train.train_parallel`,
     by segments :func:`~gyrocomp.pipeline.train.train_parallel_segments`)
-    with the same seed, so the models do not depend on `workers`.
+    with the same seed, so the models do not depend on `workers`. A gap-free
+    LCD axis longer than :data:`gyrocomp.decompose.lcd_blocks.BLOCK` samples
+    is decomposed on disk in a temporary directory
+    (:func:`~gyrocomp.pipeline.train.train_parallel_on_disk`), the same model
+    in memory that does not grow with the log.
     """
     from gyrocomp.workers import run_local
 
@@ -262,12 +267,15 @@ def train_axes(recording, config: dict, *, source: str, seed: int | None, worker
 
 
 def _train_axis(task: dict) -> dict:
+    import tempfile
+
     from gyrocomp.classify import ClassifySettings, classify
     from gyrocomp.commands.decompose import table
     from gyrocomp.config import bind, settings_dict
     from gyrocomp.decompose import DecomposeSettings, decompose
+    from gyrocomp.decompose.lcd_blocks import BLOCK
     from gyrocomp.pipeline.settings import pipeline_settings
-    from gyrocomp.pipeline.train import fit_parallel, parallel_targets, train_direct, train_parallel_segments
+    from gyrocomp.pipeline.train import fit_parallel, parallel_targets, train_direct, train_parallel_on_disk, train_parallel_segments
 
     recording, config, source, seed = task["recording"], task["config"], task["source"], task["seed"]
     if not pipeline_settings(config, source).parallel:
@@ -275,6 +283,9 @@ def _train_axis(task: dict) -> dict:
     if len(task["bounds"]) > 1:
         return train_parallel_segments(recording, config, source=source, seed=seed, bounds=task["bounds"])
     settings = bind(DecomposeSettings, config.get("decompose"), f"{source} [decompose]")
+    if settings.method == "lcd" and len(recording.rate_dps) > BLOCK:  # a long record: its decomposition on disk
+        with tempfile.TemporaryDirectory(prefix="gyrocomp-train-") as directory:
+            return train_parallel_on_disk(recording, config, directory, source=source, seed=seed)
     classify_settings = bind(ClassifySettings, config.get("classify"), f"{source} [classify]")
     result = decompose(recording.rate_dps, settings, seed=seed)
     classes = {"settings": settings_dict(classify_settings), "components": classify(result.components, result.names, classify_settings)}

@@ -468,6 +468,19 @@ def _splines(knots, n):
     and the last-but-one knot); three knots give the parabola, two the
     line. All sets form one block-diagonal system solved by LAPACK gtsv.
     """
+    t_int, _, sizes = knots
+    pieces = _spline_pieces(knots)
+    g = _piece_index(t_int, pieces[5], pieces[6], n)
+    samples = np.tile(np.arange(n, dtype=float), sizes.size)
+    return _spline_values(pieces, g, samples).reshape(sizes.size, n)
+
+
+def _spline_pieces(knots):
+    """Cubic pieces of the not-a-knot splines of :func:`_splines`: (t, z, s0, c2, c3, start, end).
+
+    Piece i runs from knot i: ``z_i + s0_i u + c2_i u^2 + c3_i u^3``, u the
+    distance from ``t_i``; `start` and `end` index each set's first and last knot.
+    """
     t_int, z, sizes = knots
     t = t_int.astype(float)
     start = np.cumsum(sizes) - sizes
@@ -512,9 +525,13 @@ def _splines(knots, n):
     s0, s1 = s[:-1], s[1:]
     c2 = (3.0 * slope - 2.0 * s0 - s1) / h
     c3 = (s0 + s1 - 2.0 * slope) / (h * h)
-    g = _piece_index(t_int, start, end, n)
-    u = np.tile(np.arange(n, dtype=float), sizes.size)
-    u -= np.take(t, g)
+    return t, z, s0, c2, c3, start, end
+
+
+def _spline_values(pieces, g, samples):
+    """Values of the pieces `g` (:func:`_spline_pieces`) at `samples` (float positions), in the order of :func:`_splines`."""
+    t, z, s0, c2, c3 = pieces[:5]
+    u = samples - np.take(t, g)
     out = np.take(c3, g)
     out *= u
     out += np.take(c2, g)
@@ -522,7 +539,7 @@ def _splines(knots, n):
     out += np.take(s0, g)
     out *= u
     out += np.take(z, g)
-    return out.reshape(sizes.size, n)
+    return out
 
 
 def _piece_index(t_int, start, end, n):

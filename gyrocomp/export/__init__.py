@@ -186,7 +186,7 @@ def _sensors(models: dict, options: ExportOptions) -> dict:
     """The models grouped by sensor instance: ``(sensor, instance, device id)`` to ``{axis: model}``.
 
     An axis trained from a flight log carries its instance and device id
-    (``sensor`` in ``model.json``: :func:`gyrocomp.pipeline.train.model_file`);
+    (``sensor`` in ``model.json``: :func:`gyrocomp.pipeline.model_file.model_file`);
     any other to instance None (the format's ``--instance``) and ``options.device_id``, by unit.
     """
     logged = [name for name, model in models.items() if "sensor" in model.obj]

@@ -44,7 +44,10 @@ from gyrocomp.models._base import check_choice, check_float, finite_array, scale
 from gyrocomp.pipeline.rate import CausalRate, check_described
 from gyrocomp.pipeline.settings import PIPELINE_KINDS, RateSettings
 from gyrocomp.streaming import CHUNK_ROWS
-from gyrocomp.pipeline.train import INPUTS, axis_models, class_sums, segment_inputs
+from gyrocomp.pipeline.model_file import axis_models
+from gyrocomp.pipeline.signal_path import class_sums
+from gyrocomp.pipeline.block_fit import INPUTS
+from gyrocomp.pipeline.train import segment_inputs
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -356,7 +359,7 @@ def compensate(
         Row ranges sampled without a gap (``None``: one). The temperature
         rate is estimated within each, never across a gap; ``full`` mode of
         a parallel pipeline decomposes, classifies and denoises each on its
-        own (:func:`~gyrocomp.pipeline.train.class_sums`).
+        own (:func:`~gyrocomp.pipeline.signal_path.class_sums`).
 
     Returns
     -------
@@ -420,7 +423,7 @@ def _compensate_static(recording, model: DriftModel, mode, clamp, seed, workers,
 
 
 def _parallel_segments(recording, model: DriftModel, seed, workers, callback, bounds):
-    """The class sums and classes of each gap-free range (:func:`~gyrocomp.pipeline.train.class_sums`), with the model's settings."""
+    """The class sums and classes of each gap-free range (:func:`~gyrocomp.pipeline.signal_path.class_sums`), with the model's settings."""
     from gyrocomp.classify import ClassifySettings
     from gyrocomp.decompose import DecomposeSettings
     from gyrocomp.denoise import DenoiseSettings

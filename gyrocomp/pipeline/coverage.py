@@ -104,7 +104,7 @@ def check_run(name: str, time_s: np.ndarray, temperature_c: np.ndarray, segments
     temperature = np.asarray(temperature_c, dtype=float)
     time = np.asarray(time_s, dtype=float)
     messages = []
-    q = quantum(temperature)
+    q = _coarse_quantum(temperature, settings.min_quantum_c)
     if q >= settings.min_quantum_c:
         messages.append(
             f"{name}: temperature quantised to {q:.3g} degC steps: dT/dt over the {rate_window_s:g} s window moves in steps "
@@ -151,16 +151,65 @@ def even_over_temperature(X: np.ndarray, y: np.ndarray, temperature_c: np.ndarra
     return means[:, :-1], means[:, -1]
 
 
+def _coarse_quantum(temperature: np.ndarray, coarsest: float) -> float:
+    """:func:`quantum` of the run where it can reach `coarsest` [degC], else at most that, in memory of `_ROWS` readings.
+
+    On a grid of step >= `coarsest` the run takes at most ``ptp / coarsest + 1``
+    distinct values; they are gathered `_ROWS` readings at a time, and once
+    there are more (a noisy temperature: at the first chunk) the step is
+    finer than `coarsest` and 0 is returned. Otherwise :func:`quantum` of the
+    distinct values, which equals that of the run.
+    """
+    limit = float(np.ptp(temperature)) / coarsest + 2
+    values = np.empty(0)
+    for lo in range(0, temperature.size, _ROWS):
+        values = np.union1d(values, temperature[lo : lo + _ROWS])
+        if values.size > limit:
+            return 0.0
+    return quantum(values)
+
+
 def _steepest_ramp(time: np.ndarray, temperature: np.ndarray, segments: Sequence[slice], window_s: float) -> float | None:
-    """Largest |difference of consecutive window means| / window [degC/min] within the segments; None when no segment holds two windows."""
+    """Largest |difference of consecutive window means| / window [degC/min] within the segments; None when no segment holds two windows.
+
+    The window sums are taken whole windows at a time, about `_ROWS`
+    readings (each window's sum in reading order, as one ``np.bincount``
+    of the segment gives it).
+    """
     steepest = None
     for seg in segments:
-        t, x = time[seg], temperature[seg]
-        if len(t) < 2 or t[-1] - t[0] < 2 * window_s:
+        lo, hi = seg.indices(len(time))[:2]
+        if hi - lo < 2 or time[hi - 1] - time[lo] < 2 * window_s:
             continue
-        index = np.floor((t - t[0]) / window_s).astype(np.int64)
-        sums, counts = np.bincount(index, weights=x), np.bincount(index)
+        t0 = time[lo]
+        n_windows = int(np.floor((time[hi - 1 : hi] - t0) / window_s)[0]) + 1
+        sums, counts = np.zeros(n_windows), np.zeros(n_windows, np.int64)
+        start = lo
+        while start < hi:
+            stop, index = _whole_windows(time, start, hi, t0, window_s)
+            first = index[0]
+            sums[first : index[-1] + 1] += np.bincount(index - first, weights=temperature[start:stop])
+            counts[first : index[-1] + 1] += np.bincount(index - first)
+            start = stop
         means = sums[counts > 0] / counts[counts > 0]
         rate = float(np.max(np.abs(np.diff(means)))) / window_s * 60.0
         steepest = rate if steepest is None else max(steepest, rate)
     return steepest
+
+
+def _whole_windows(time: np.ndarray, start: int, hi: int, t0: float, window_s: float) -> tuple[int, np.ndarray]:
+    """The end of a run of whole windows from `start` (about `_ROWS` readings; the segment's end `hi` closes the last) and their window index."""
+    size = _ROWS
+    while True:
+        stop = min(hi, start + size)
+        index = np.floor((time[start:stop] - t0) / window_s).astype(np.int64)
+        if stop == hi:
+            return stop, index
+        cut = int(np.searchsorted(index, index[-1]))
+        if cut:
+            return start + cut, index[:cut]
+        size *= 2
+
+
+_ROWS = 1 << 18
+"""Readings the coverage checks take at a time (their memory does not grow with the run)."""

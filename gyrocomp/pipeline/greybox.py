@@ -58,7 +58,7 @@ def train_greybox(runs: list, config: dict, *, source: str, seed: int | None = 0
     Returns
     -------
     models : dict of str to dict
-        Per axis name, the model (:func:`gyrocomp.pipeline.train.model_file` gathers them).
+        Per axis name, the model (:func:`gyrocomp.pipeline.model_file.model_file` gathers them).
     units : dict of str to str
     """
     params, power_on = greybox_params(config, source)

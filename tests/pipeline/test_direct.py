@@ -123,7 +123,7 @@ def test_out_of_range_recording_warns_by_how_much(make_recording, trained):
 
 def test_block_means_never_span_a_gap():
     """Training on block means (``[model] max_samples``): each gap-free range starts a block, runs hold whole blocks."""
-    from gyrocomp.pipeline.train import _runs
+    from gyrocomp.pipeline.block_fit import _runs
 
     ranges = [(0, 5), (5, 12)]
     starts = np.array([0, 3, 5, 8, 11])  # blocks of ceil(12 / 4) = 3 samples: rows 0-2, 3-4 | 5-7, 8-10, 11
@@ -139,7 +139,7 @@ def test_block_means_never_span_a_gap():
 @pytest.mark.parametrize("name", ["polynomial", "elm"])
 def test_training_run_by_run_equals_the_whole_arrays(name, oven_pair, monkeypatch):
     """Inputs computed 50 samples at a time (many runs) give the model of one run (all samples at once) to 1e-12."""
-    import gyrocomp.pipeline.train as train_module
+    import gyrocomp.pipeline.block_fit as train_module
 
     train, *_ = oven_pair
     whole = train_direct(train, load_config(name), source=name, seed=0)

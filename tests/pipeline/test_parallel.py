@@ -153,7 +153,7 @@ def test_class_sums_one_component_at_a_time_equal_the_stacked_sum():
 
     from gyrocomp import denoise
     from gyrocomp.denoise import DenoiseSettings
-    from gyrocomp.pipeline.train import segments
+    from gyrocomp.pipeline.signal_path import segments
 
     rng = np.random.default_rng(11)
     stack = rng.standard_normal((7, 3000)) * np.logspace(0, -2, 7)[:, None] + np.linspace(0, 1, 3000)
