@@ -200,7 +200,7 @@ def class_sums_on_disk(rate, decompose_settings, classify_settings, denoise_sett
     decompose_settings, classify_settings, denoise_settings
         As :func:`class_sums`; the method must be ``lcd``.
     directory : path-like
-        A temporary directory: about 150 bytes a sample go there.
+        A temporary directory: about 140 bytes a sample go there.
     callback : callable(done, total) or None
         The decomposition's progress.
 

@@ -212,7 +212,7 @@ def train_parallel_on_disk(recording: recordings.Recording, config: dict, direct
     config : dict
         A parallel pipeline config whose ``[decompose] method`` is ``lcd``.
     directory : path-like
-        A temporary directory for the components (about 150 bytes a sample).
+        A temporary directory for the components (about 140 bytes a sample).
     source, seed
         As :func:`train_parallel`; `seed` is recorded as the decomposition's.
     """
