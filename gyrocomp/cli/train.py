@@ -110,7 +110,9 @@ def greybox_line(fitted: dict) -> str:
     if spec["tau_e_s"]:
         parts.append(f"thermal_lag tau {spec['tau_e_s']:.4g} s")
     if spec["rate_form"]:
-        parts.append("temp_rate" + (" heating/cooling apart" if spec["rate_form"] == 2 else "") + f" (filter {spec['rate_tau_s']:.3g} s)")
+        saturation = spec.get("rate_saturation_c_per_s", 0.0)
+        parts.append("temp_rate" + (" heating/cooling apart" if spec["rate_form"] == 2 else "") + f" (filter {spec['rate_tau_s']:.3g} s"
+                     + (f", saturating at {60 * saturation:.3g} degC/min" if saturation else "") + ")")
     if spec["width_c"]:
         parts.append(f"hysteresis width {spec['width_c']:.3g} degC")
     if spec["tau_w_s"]:

@@ -133,11 +133,13 @@ def new_state() -> np.ndarray:
 
 
 @numba.njit(cache=True, error_model="numpy")
-def evaluate(raw, time_s, coef, centre, half, lo, hi, power_on_s, tau_w, tau_w2, out):
+def evaluate(raw, time_s, coef, centre, half, lo, hi, power_on_s, tau_w, tau_w2, rate_sat, out):
     """The drift [deg/s] of each sample from :func:`advance`'s columns, in one pass (no temporaries).
 
     ``out = b0 + ((c3 z + c2) z + c1) z + g r + a |r| + h H + l (T_e2 - T_e) / half
     + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2)``, ``z = (clip(T_e, lo, hi) - centre) / half``,
+    ``r`` the causal dT/dt or, with ``rate_sat`` > 0, ``rate_sat tanh(dT/dt / rate_sat)``
+    (:func:`gyrocomp.effects.shapes.saturating_rate`),
     ``coef = (b0, c1, c2, c3, g, a, h, l, A, A2)`` (0 for an absent term; ``tau_w`` 0: no warm-up).
 
     Parameters
@@ -150,12 +152,16 @@ def evaluate(raw, time_s, coef, centre, half, lo, hi, power_on_s, tau_w, tau_w2,
         The cubic's scaling and its clamp [degC] (-inf, inf: none).
     power_on_s, tau_w, tau_w2 : float
         Power-on time and warm-up time constants [s].
+    rate_sat : float
+        Saturation rate of the dT/dt sensitivity [degC/s] (0: linear).
     out : ndarray, shape (n,)
     """
     for i in range(time_s.shape[0]):
         te = raw[i, 0]
         z = (min(max(te, lo), hi) - centre) / half
         r = raw[i, 1]
+        if rate_sat > 0.0:
+            r = rate_sat * math.tanh(r / rate_sat)
         value = coef[0] + ((coef[3] * z + coef[2]) * z + coef[1]) * z + coef[4] * r + coef[5] * abs(r) + coef[6] * raw[i, 2]
         value += coef[7] * (raw[i, 3] - te) / half
         if tau_w > 0.0:

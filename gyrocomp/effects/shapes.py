@@ -23,6 +23,7 @@ __all__ = [
     "bias_polynomial",
     "element_temperature",
     "temperature_rate",
+    "saturating_rate",
     "hysteresis_branch",
     "hysteresis_play",
     "first_excursion",
@@ -146,6 +147,38 @@ def temperature_rate(time_s, temperature_c, smooth_s=0.0):
     if window < 3:
         return np.gradient(temperature_c, time_s)
     return signal.savgol_filter(temperature_c, window, min(2, window - 1), deriv=1, delta=h, mode="interp")
+
+
+def saturating_rate(rate_c_per_s, saturation_c_per_s):
+    """A dT/dt sensitivity that saturates: ``s tanh(dT/dt / s)``, the regressor of a saturating ``temp_rate``.
+
+    The gradient across a part grows with the ramp rate until the package's
+    heat paths limit it; the response is then linear in dT/dt for slow ramps
+    and bounded for fast ones. In units of the rate, so its coefficient is
+    the small-ramp sensitivity, the same as a linear term's.
+
+    Parameters
+    ----------
+    rate_c_per_s : array_like
+        dT/dt [degC/s].
+    saturation_c_per_s : float
+        ``s`` [degC/s] > 0: the rate at which the response is tanh(1) = 76 %
+        of the linear one.
+
+    Returns
+    -------
+    numpy.ndarray
+        [degC/s], of the shape of `rate_c_per_s`.
+
+    Examples
+    --------
+    >>> saturating_rate([0.001, 0.01, 0.1], 0.01).round(5)
+    array([0.001  , 0.00762, 0.01   ])
+    """
+    s = float(saturation_c_per_s)
+    if not s > 0:
+        raise InputError(f"saturation rate {saturation_c_per_s!r} must be > 0 degC/s")
+    return s * np.tanh(np.asarray(rate_c_per_s, dtype=float) / s)
 
 
 def hysteresis_branch(time_s, temperature_c, deadband_c):

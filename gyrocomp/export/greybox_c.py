@@ -14,9 +14,10 @@ step: the temperature bridged linearly, as ``bridge_gaps`` does):
 * a second element temperature ``T_e2`` as ``T_e``;
 * ``drift = offset + sum_k c_k z^k + g dT/dt + a |dT/dt| + h play (or h br)
   + l (T_e2 - T_e) / half_range + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2)``,
-  ``z = (clamp(T_e) - centre) / half_range``, ``dT/dt = (T - T_f) / tau_r``.
+  ``z = (clamp(T_e) - centre) / half_range``, ``dT/dt = (T - T_f) / tau_r``,
+  or ``s tanh((T - T_f) / (tau_r s))`` where the sensitivity saturates at ``s``.
 
-No ``malloc``; ``exp`` and ``expm1`` from libm (C99). ``GYROCOMP_REAL`` =
+No ``malloc``; ``exp``, ``expm1`` and ``tanh`` from libm (C99). ``GYROCOMP_REAL`` =
 ``double`` (default) or ``float``; ``GYROCOMP_NO_CLAMP`` extrapolates the
 cubic. With ``GYROCOMP_TEST_VECTORS`` the header also holds time,
 temperature, rate and the compensated rate Python gave for them.
@@ -80,12 +81,13 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         " * compensated = rate - drift(state, t, T); rate in deg/s, T in degC, t in s (any steps; a gap bridges T linearly).",
         f" * terms: element lag tau_e = {spec['tau_e_s']:.6g} s, dT/dt filter {tau_r:g} s, play width {spec['width_c']:.6g} degC,",
         f" * hysteresis operator {spec['hysteresis_operator']}, second element lag {spec['tau_e2_s']:.6g} s,",
-        f" * warm-up tau = {spec['tau_w_s']:.6g} s and {spec['tau_w2_s']:.6g} s (0: absent). Define GYROCOMP_REAL as float for single precision,",
+        f" * warm-up tau = {spec['tau_w_s']:.6g} s and {spec['tau_w2_s']:.6g} s, dT/dt saturation {spec['rate_saturation_c_per_s']:.6g} degC/s",
+        " * (0: absent). Define GYROCOMP_REAL as float for single precision,",
         " * GYROCOMP_NO_CLAMP to extrapolate the cubic beyond the training range.",
         f" * Usage: {P}_state s; {P}_init(&s); for each sample: y = {P}_update(&s, t, T, rate); */",
         f"#ifndef {U}_H",
         f"#define {U}_H",
-        "#include <math.h> /* exp, expm1 */",
+        "#include <math.h> /* exp, expm1, tanh */",
         "#ifndef GYROCOMP_REAL",
         "#define GYROCOMP_REAL double",
         "#endif",
@@ -136,6 +138,9 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         f"    return rate - ({' + '.join(terms)});",
         "}",
     ]
+    if spec["rate_form"] and spec["rate_saturation_c_per_s"]:
+        sat = f"({P}_real){_num(spec['rate_saturation_c_per_s'])}"
+        lines.insert(lines.index(f"    r = (t_c - s->tf) / ({P}_real){_num(tau_r)};") + 1, f"    r = {sat} * tanh(r / {sat});")
     if not spec["rate_form"]:
         lines.insert(lines.index(f"    r = (t_c - s->tf) / ({P}_real){_num(tau_r)};") + 1, "    (void)r;")
     if vectors is not None:

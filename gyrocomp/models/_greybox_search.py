@@ -18,12 +18,15 @@ from scipy import linalg, optimize
 from gyrocomp.effects.shapes import first_excursion, hysteresis_branch
 from gyrocomp.errors import InputError
 from gyrocomp.identifiability import Refusal, separable
-from gyrocomp.models._greybox_state import SECOND_OF, Spec, columns_of, kernel
+from gyrocomp.models._greybox_state import JOINS, Spec, columns_of, kernel
 
-__all__ = ["Prepared", "Search", "RATE_GRID_POINTS", "SETTLE_TAUS"]
+__all__ = ["Prepared", "Search", "RATE_GRID_POINTS", "SATURATION_GRID_POINTS", "SETTLE_TAUS"]
 
 RATE_GRID_POINTS = 6
 """Points of the log grid of the dT/dt filter's time constant (then refined)."""
+
+SATURATION_GRID_POINTS = 13
+"""Points of the log grid of the dT/dt saturation rate (then refined)."""
 
 SETTLE_TAUS = 5.0
 """The causal dT/dt starts at 0 (the filter cold); the first ``SETTLE_TAUS * rate_tau_s[1]`` seconds of a run
@@ -198,7 +201,8 @@ class Search:
         """None when the runs identify `term` at `trial` beside the columns of `spec`, else the :class:`Refusal`.
 
         The columns judged are those `term` adds; for the thermal lag, which
-        replaces T by T_e in the cubic, the difference ``T_e - T``.
+        replaces T by T_e in the cubic, the difference ``T_e - T``; for the
+        saturation, which replaces dT/dt by ``s tanh(dT/dt / s)``, their difference.
         """
         if term == "hysteresis" and not any(_reverses(r.temperature_c, trial.width) for r in self.runs):
             return Refusal(
@@ -208,9 +212,11 @@ class Search:
             )
         base = self._stacked(spec)
         if term == "thermal_lag":
-            m = self.model
             lag = [block_means(self._raw_of(i, trial)[:, 0] - r.temperature_c, r.block_of, r.n_blocks) for i, r in enumerate(self.runs)]
             added = {"thermal_lag (T_e - T)": np.concatenate(lag)}
+        elif term == "rate_saturation":  # the saturated dT/dt replaces the linear one: judge what it adds
+            saturated = self._stacked(trial)
+            added = {f"rate_saturation ({n}: saturated less linear)": saturated[n] - base[n] for n in ("rate", "rate_abs") if n in base}
         else:
             added = {f"{term} ({n})": c for n, c in self._stacked(trial).items() if n not in base}
         _, refused = separable({**base, **added}, self.model.min_unique_variance)
@@ -233,6 +239,7 @@ class Search:
             "warmup": [{"tau_w": float(v)} for v in np.geomspace(*m.warmup_tau_s, m.grid_points)],
             "second_lag": _pairs("tau_e", "tau_e2", np.geomspace(*m.lag_tau_s, m.grid_points)),
             "second_warmup": _pairs("tau_w", "tau_w2", np.geomspace(*m.warmup_tau_s, m.grid_points)),
+            "rate_saturation": [{"rate_sat": float(v)} for v in np.geomspace(*m.rate_saturation_c_per_s, SATURATION_GRID_POINTS)],
         }
 
     def run(self) -> tuple[Spec, list, list]:
@@ -249,12 +256,12 @@ class Search:
             )
         grids = self.grids()
         for term in m.terms:  # judged against the baseline: a term no parameter of its grid separates from it
-            if term in not_fitted or term in SECOND_OF:  # a second time constant is judged beside its first, once that is in
+            if term in not_fitted or term in JOINS:  # a joining term is judged beside the term it joins, once that is in
                 continue
             refusals = [self.identified(spec, dataclasses.replace(spec, **change), term) for change in grids[term]]
             if all(r is not None for r in refusals):
                 not_fitted[term] = max(refusals, key=lambda r: r.unique).reason  # the nearest miss (the narrowest play)
-        for second, first in SECOND_OF.items():  # a second time constant where its first cannot be fitted
+        for second, first in JOINS.items():  # a joining term where the term it joins cannot be fitted
             if second in m.terms and first in not_fitted:
                 not_fitted[second] = f"{second} not fitted: {first} is not ({not_fitted[first].split(': ', 1)[1]})"
         remaining = [t for t in m.terms if t not in not_fitted]
@@ -265,8 +272,8 @@ class Search:
                 for change in grids[term]:
                     if term == "temp_rate" and change["rate_form"] <= spec.rate_form:
                         continue  # a selected sensitivity may still split into heating and cooling
-                    if term in SECOND_OF and SECOND_OF[term] not in spec.terms():
-                        continue  # a second time constant only beside the first
+                    if term in JOINS and JOINS[term] not in spec.terms():
+                        continue  # a second time constant or a saturation only beside the term it joins
                     trial = dataclasses.replace(spec, **change)
                     if self.identified(spec, trial, term) is not None:
                         continue  # not separable, at this parameter, from what the model holds
@@ -280,6 +287,11 @@ class Search:
             t_blocks, _, t_names = self.design(trial)
             t_noise, t_dev, _ = self.fit_noise(t_blocks, noise)
             t_score = self.bic(t_dev, self.n_params(trial, t_names, 3))
+            # The model without the term, refitted from the trial's noise levels: the noise fit is local (Nelder-Mead),
+            # and a better optimum it finds from a new start is no gain of the term's.
+            b_noise, b_dev, _ = self.fit_noise(blocks, t_noise)
+            if self.bic(b_dev, self.n_params(spec, names, 3)) < score:
+                noise, score = b_noise, self.bic(b_dev, self.n_params(spec, names, 3))
             upgrade = term == "temp_rate" and spec.rate_form > 0  # heating and cooling apart must pay, whatever `selection`
             if (m.selection == "bic" or upgrade) and score - t_score <= m.bic_margin:
                 if upgrade and m.selection == "all" and len(remaining) > 1:
@@ -287,7 +299,7 @@ class Search:
                     continue
                 break
             steps.append({"term": term, "params": _params(trial, term), "delta_bic": float(t_score - score)})
-            spec, noise, score = trial, t_noise, t_score
+            spec, noise, score, blocks, names = trial, t_noise, t_score, t_blocks, t_names
             if term != "temp_rate" or spec.rate_form == 2:
                 remaining.remove(term)
         spec = self.refine(spec, noise)
@@ -311,14 +323,17 @@ class Search:
             "tau_w": (self.model.warmup_tau_s[1] / self.model.warmup_tau_s[0]) ** (1 / (self.model.grid_points - 1)),
             "width": max(b / a for a, b in zip(sorted(self.model.widths_c), sorted(self.model.widths_c)[1:])) if len(self.model.widths_c) > 1 else 2.0,
             "tau_r": (self.model.rate_tau_s[1] / self.model.rate_tau_s[0]) ** (1 / (RATE_GRID_POINTS - 1)),
+            "rate_sat": (self.model.rate_saturation_c_per_s[1] / self.model.rate_saturation_c_per_s[0]) ** (1 / (SATURATION_GRID_POINTS - 1)),
         }
         spacing |= {"tau_e2": spacing["tau_e"], "tau_w2": spacing["tau_w"]}
-        terms = {"tau_e": "thermal_lag", "tau_w": "warmup", "width": "hysteresis", "tau_r": "temp_rate", "tau_e2": "second_lag", "tau_w2": "second_warmup"}
+        terms = {"tau_e": "thermal_lag", "tau_w": "warmup", "width": "hysteresis", "tau_r": "temp_rate", "tau_e2": "second_lag", "tau_w2": "second_warmup",
+                 "rate_sat": "rate_saturation"}
         m = self.model
         ranges = {"tau_e": m.lag_tau_s, "tau_w": m.warmup_tau_s, "width": (min(m.widths_c), max(m.widths_c)), "tau_r": m.rate_tau_s,
-                  "tau_e2": m.lag_tau_s, "tau_w2": m.warmup_tau_s}
+                  "tau_e2": m.lag_tau_s, "tau_w2": m.warmup_tau_s, "rate_sat": m.rate_saturation_c_per_s}
         without = {"tau_e": {"tau_e": 0.0, "tau_e2": 0.0}, "tau_w": {"tau_w": 0.0, "tau_w2": 0.0}, "width": {"width": 0.0},
-                   "tau_r": {"rate_form": 0, "tau_r": 0.0}, "tau_e2": {"tau_e2": 0.0}, "tau_w2": {"tau_w2": 0.0}}
+                   "tau_r": {"rate_form": 0, "tau_r": 0.0, "rate_sat": 0.0}, "tau_e2": {"tau_e2": 0.0}, "tau_w2": {"tau_w2": 0.0},
+                   "rate_sat": {"rate_sat": 0.0}}
         for _ in range(2):
             for key, factor in spacing.items():
                 value = getattr(spec, key)
@@ -361,6 +376,7 @@ def _params(spec: Spec, term: str) -> dict:
         "warmup": {"tau_s": spec.tau_w},
         "second_lag": {"tau_s": spec.tau_e2},
         "second_warmup": {"tau_s": spec.tau_w2},
+        "rate_saturation": {"saturation_c_per_s": spec.rate_sat},
     }[term]
 
 

@@ -14,14 +14,15 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["TERMS", "SECOND_OF", "Spec", "kernel", "columns_of"]
+__all__ = ["TERMS", "JOINS", "Spec", "kernel", "columns_of"]
 
-TERMS = ("thermal_lag", "temp_rate", "hysteresis", "warmup", "second_lag", "second_warmup")
+TERMS = ("thermal_lag", "temp_rate", "hysteresis", "warmup", "second_lag", "second_warmup", "rate_saturation")
 """The model's optional terms, in the order they are judged: the vocabulary's names, then a second time constant
-of the element lag and of the warm-up, each tried only once the first is in."""
+of the element lag and of the warm-up and a saturation of the dT/dt sensitivity, each tried only once the term
+it joins is in."""
 
-SECOND_OF = {"second_lag": "thermal_lag", "second_warmup": "warmup"}
-"""Each second time constant and the term it joins: it is tried only once that term is in."""
+JOINS = {"second_lag": "thermal_lag", "second_warmup": "warmup", "rate_saturation": "temp_rate"}
+"""Each term that refines another and the term it joins: it is tried only once that term is in."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -36,9 +37,10 @@ class Spec:
     relay: bool = False  # the hysteresis is a direction relay, not a play (with width)
     tau_e2: float = 0.0  # a second element time constant (with tau_e)
     tau_w2: float = 0.0  # a second warm-up time constant (with tau_w)
+    rate_sat: float = 0.0  # the dT/dt sensitivity saturates: s tanh(dT/dt / s), s in degC/s (with rate_form)
 
     def terms(self) -> list[str]:
-        present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0, self.tau_e2 > 0, self.tau_w2 > 0)
+        present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0, self.tau_e2 > 0, self.tau_w2 > 0, self.rate_sat > 0)
         return [t for t, on in zip(TERMS, present) if on]
 
     def n_nonlinear(self) -> int:
@@ -60,7 +62,8 @@ def columns_of(raw, time_s, spec: Spec, power_on_s, centre, half, degree) -> dic
     """The model's design columns of a spec from the kernel's output (no offsets).
 
     ``z1..z3`` (powers of the scaled element temperature), ``rate`` and
-    ``rate_abs`` (dT/dt; heating and cooling apart), ``play`` or ``relay``
+    ``rate_abs`` (dT/dt, or its saturation
+    :func:`~gyrocomp.effects.shapes.saturating_rate`; heating and cooling apart), ``play`` or ``relay``
     (the hysteresis operator's output), ``warmup`` and ``warmup2``
     (``exp(-t_on / tau)``) and ``lag2`` (the second element temperature
     less the first, scaled as z: the second path's share of the drift).
@@ -68,9 +71,12 @@ def columns_of(raw, time_s, spec: Spec, power_on_s, centre, half, degree) -> dic
     z = (raw[:, 0] - centre) / half
     columns = {f"z{k}": z**k for k in range(1, degree + 1)}
     if spec.rate_form:
-        columns["rate"] = raw[:, 1]
+        from gyrocomp.effects.shapes import saturating_rate  # scipy.signal: only a fit needs it, compensation evaluates in numba
+
+        rate = saturating_rate(raw[:, 1], spec.rate_sat) if spec.rate_sat else raw[:, 1]
+        columns["rate"] = rate
         if spec.rate_form == 2:
-            columns["rate_abs"] = np.abs(raw[:, 1])
+            columns["rate_abs"] = np.abs(rate)
     if spec.width:
         columns["relay" if spec.relay else "play"] = raw[:, 2]
     if spec.tau_w:

@@ -1,4 +1,4 @@
-"""A causal grey-box model of the bias: element-temperature lag, a cubic, heating/cooling dT/dt, a play hysteresis, a warm-up.
+"""A causal grey-box model of the bias: element-temperature lag, a cubic, heating/cooling dT/dt, a hysteresis, a warm-up.
 
 Every static map (the autopilots' cubic, the papers' learned maps of
 (T, dT/dt)) forgets that a gyro has state: its sensing element lags the
@@ -18,7 +18,10 @@ the effect shapes of the vocabulary (:mod:`gyrocomp.effects.vocabulary`):
   first-order filter whose time constant ``tau_r`` is fitted too (within
   ``rate_tau_s``): the gradient across the part lags the sensor, and a
   fixed filter's delay at the corners of a ramp costs more than its
-  smoothing gains (:mod:`gyrocomp.effects._stateful`);
+  smoothing gains (:mod:`gyrocomp.effects._stateful`); where it pays, the
+  sensitivity saturates, ``dT/dt`` replaced by ``s tanh(dT/dt / s)``
+  (:func:`gyrocomp.effects.shapes.saturating_rate`, ``s`` fitted within
+  ``rate_saturation_c_per_s``);
 * ``hysteresis``: a play operator of width ``w`` (its output ``P_w`` in
   [-1, 1], :func:`gyrocomp.effects.shapes.hysteresis_play`) with its branch state;
 * ``warmup``: ``A exp(-t_on / tau_w)``, ``t_on`` the time since power-on
@@ -58,11 +61,11 @@ import numpy as np
 
 from gyrocomp.errors import InputError
 from gyrocomp.models._base import NotFittedError, Params
-from gyrocomp.models._greybox_state import SECOND_OF, TERMS, Spec, kernel
+from gyrocomp.models._greybox_state import JOINS, TERMS, Spec, kernel
 
 __all__ = ["GreyBoxDrift", "GreyBoxStream", "TrainingRun", "TERMS"]
 
-VERSION = 2
+VERSION = 3
 
 
 @dataclasses.dataclass(frozen=True)
@@ -100,6 +103,9 @@ class GreyBoxDrift(Params):
     rate_tau_s : tuple of float, default=(10.0, 60.0)
         (low, high) of the time constant of the causal dT/dt filter [s],
         fitted with the dT/dt term (a log grid, then refined).
+    rate_saturation_c_per_s : tuple of float, default=(0.001, 0.1)
+        (low, high) of the log grid of the dT/dt saturation rate ``s``
+        [degC/s] of the ``rate_saturation`` term.
     terms : tuple of str
         Candidate terms, a subset of :data:`TERMS`.
     lag_tau_s, warmup_tau_s : tuple of float
@@ -126,7 +132,9 @@ class GreyBoxDrift(Params):
     Attributes
     ----------
     spec_ : dict
-        ``tau_e_s``, ``rate_form`` (0, 1, 2), ``width_c``, ``tau_w_s``.
+        ``tau_e_s``, ``rate_form`` (0, 1, 2), ``width_c``, ``tau_w_s``,
+        ``rate_tau_s``, ``hysteresis_operator``, ``tau_e2_s``, ``tau_w2_s``,
+        ``rate_saturation_c_per_s`` (0: a term absent).
     coef_ : dict of str to float
         Column coefficients [deg/s per column unit]: ``z1..z3``, ``rate``,
         ``rate_abs``, ``play``, ``warmup``.
@@ -152,6 +160,7 @@ class GreyBoxDrift(Params):
         degree=3,
         reference_temperature=25.0,
         rate_tau_s=(10.0, 60.0),
+        rate_saturation_c_per_s=(0.001, 0.1),
         terms=TERMS,
         lag_tau_s=(10.0, 14400.0),
         warmup_tau_s=(60.0, 14400.0),
@@ -167,6 +176,7 @@ class GreyBoxDrift(Params):
         self.degree = degree
         self.reference_temperature = reference_temperature
         self.rate_tau_s = rate_tau_s
+        self.rate_saturation_c_per_s = rate_saturation_c_per_s
         self.terms = terms
         self.lag_tau_s = lag_tau_s
         self.warmup_tau_s = warmup_tau_s
@@ -190,11 +200,11 @@ class GreyBoxDrift(Params):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < math.inf:
                 raise InputError(f"{owner}: {name} = {value!r} must be a finite number > 0")
-        for name in ("lag_tau_s", "warmup_tau_s", "rate_tau_s"):
+        for name in ("lag_tau_s", "warmup_tau_s", "rate_tau_s", "rate_saturation_c_per_s"):
             lo, hi = getattr(self, name)
             if not 0 < lo <= hi < math.inf:
                 raise InputError(f"{owner}: {name} = {getattr(self, name)!r} must be (low, high) with 0 < low <= high")
-        lone = [f"{second} needs {first}" for second, first in SECOND_OF.items() if second in self.terms and first not in self.terms]
+        lone = [f"{second} needs {first}" for second, first in JOINS.items() if second in self.terms and first not in self.terms]
         if lone:
             raise InputError(f"{owner}: terms {list(self.terms)}: {'; '.join(lone)} among the terms")
         if self.selection not in ("bic", "all"):
@@ -233,7 +243,8 @@ class GreyBoxDrift(Params):
             spec, self.selection_, self.not_fitted_ = search.run()
             beta, names, noise = search.final(spec)
         self.spec_ = {"tau_e_s": spec.tau_e, "rate_form": spec.rate_form, "width_c": spec.width, "tau_w_s": spec.tau_w, "rate_tau_s": spec.tau_r,
-                      "hysteresis_operator": "relay" if spec.relay else "play", "tau_e2_s": spec.tau_e2, "tau_w2_s": spec.tau_w2}
+                      "hysteresis_operator": "relay" if spec.relay else "play", "tau_e2_s": spec.tau_e2, "tau_w2_s": spec.tau_w2,
+                      "rate_saturation_c_per_s": spec.rate_sat}
         n_runs = len(prepared)
         self.run_offsets_ = [float(b) for b in beta[:n_runs]]
         weights = np.array([p.duration_s for p in prepared])
@@ -325,7 +336,7 @@ class GreyBoxDrift(Params):
         return model
 
     def _check_loaded(self, name: str) -> None:
-        self.spec_ = {**_V1_SPEC, **self.spec_}  # a version-1 file: a play, no second time constants
+        self.spec_ = {**_ADDED_SPEC, **self.spec_}  # an older file: a play, no second time constants, no saturation
         numbers = [self.offset_, self.centre_c_, self.half_range_c_, *self.coef_.values(),
                    *(v for k, v in self.spec_.items() if k != "hysteresis_operator"),
                    *self.temperature_range_c_, *self.rate_range_c_per_s_]
@@ -336,9 +347,9 @@ class GreyBoxDrift(Params):
         if bad:
             raise InputError(f"{name}: greybox coefficient(s) {', '.join(bad)} unknown; known: {', '.join(sorted(known))}")
         spec = self.spec_
-        if set(spec) != set(_V1_SPEC) | {"tau_e_s", "rate_form", "width_c", "tau_w_s", "rate_tau_s"}:
+        if set(spec) != set(_ADDED_SPEC) | {"tau_e_s", "rate_form", "width_c", "tau_w_s", "rate_tau_s"}:
             raise InputError(f"{name}: greybox spec_ keys {sorted(spec)}; expected tau_e_s, rate_form, width_c, tau_w_s, rate_tau_s, "
-                             f"{', '.join(_V1_SPEC)}")
+                             f"{', '.join(_ADDED_SPEC)}")
         numbers = {k: v for k, v in spec.items() if k != "hysteresis_operator"}
         if (self.half_range_c_ <= 0 or any(v < 0 for v in numbers.values()) or spec["rate_form"] not in (0, 1, 2)
                 or (spec["rate_form"] and not spec["rate_tau_s"] > 0) or spec["hysteresis_operator"] not in ("play", "relay")):
@@ -348,11 +359,12 @@ class GreyBoxDrift(Params):
         """The fitted nonlinear specification (:class:`~gyrocomp.models._greybox_state.Spec`)."""
         s = self.spec_
         return Spec(s["tau_e_s"], s["rate_form"], s["width_c"], s["tau_w_s"], s["rate_tau_s"], s["hysteresis_operator"] == "relay",
-                    s["tau_e2_s"], s["tau_w2_s"])
+                    s["tau_e2_s"], s["tau_w2_s"], s["rate_saturation_c_per_s"])
 
 
-_V1_SPEC = {"hysteresis_operator": "play", "tau_e2_s": 0.0, "tau_w2_s": 0.0}
-"""The spec entries version 2 added, at the values a version-1 model holds."""
+_ADDED_SPEC = {"hysteresis_operator": "play", "tau_e2_s": 0.0, "tau_w2_s": 0.0, "rate_saturation_c_per_s": 0.0}
+"""The spec entries versions 2 (the relay, the second time constants) and 3 (the saturation) added, at the values
+an older model holds."""
 
 
 class GreyBoxStream:
@@ -393,5 +405,6 @@ class GreyBoxStream:
         raw = kernel(time_s, temperature_c, self.state, m.spec())
         lo, hi = m.temperature_range_c_ if self.clamp else (-math.inf, math.inf)
         out = np.empty(time_s.size)
-        evaluate(raw, time_s, self.coef, m.centre_c_, m.half_range_c_, lo, hi, self.power_on_s, m.spec_["tau_w_s"], m.spec_["tau_w2_s"], out)
+        evaluate(raw, time_s, self.coef, m.centre_c_, m.half_range_c_, lo, hi, self.power_on_s, m.spec_["tau_w_s"], m.spec_["tau_w2_s"],
+                 m.spec_["rate_saturation_c_per_s"], out)
         return out

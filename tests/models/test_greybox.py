@@ -61,12 +61,14 @@ def _relay(T, width, start=1.0):
 
 
 def _gyro(t, T, seed, *, tau_e=400.0, rate=1.5, asym=0.5, play=0.01, width=4.0, warm=0.03, tau_w=900.0, rrw=2e-6,
-          relay=0.0, lag2=0.0, tau_e2=3000.0, warm2=0.0, tau_w2=4000.0):
+          relay=0.0, lag2=0.0, tau_e2=3000.0, warm2=0.0, tau_w2=4000.0, sat=0.0):
     rng = np.random.default_rng(seed)
     Te = _lag(t, T, tau_e)
     d = Te - 25.0
     bias = 0.05 + 2e-3 * d - 3e-5 * d**2 + 4e-7 * d**3
     r = np.gradient(T, t)
+    if sat:  # a sensitivity that saturates at `sat` degC/s
+        r = sat * np.tanh(r / sat)
     bias += rate * r + asym * np.abs(r)
     p, out = T[0], np.empty_like(T)
     for i in range(T.size):
@@ -123,12 +125,15 @@ SECOND = {  # the forms a single term cannot hold, each with its own term beside
     "second_lag": (dict(rate=0.0, asym=0.0, play=0.0, warm=0.0, lag2=2e-3), ("thermal_lag", "second_lag"),
                    {"spec:tau_e_s": 400.0, "spec:tau_e2_s": 3000.0}),
     "second_warmup": (dict(tau_e=0.0, rate=0.0, asym=0.0, play=0.0, warm=0.03, warm2=0.02), ("warmup", "second_warmup"), {}),
+    "rate_saturation": (dict(tau_e=0.0, asym=0.0, play=0.0, warm=0.0, sat=0.005), ("temp_rate", "rate_saturation"),
+                        {"spec:rate_saturation_c_per_s": 0.005, "coef:rate": 1.5}),
 }
 
 
 @pytest.mark.parametrize("form", list(SECOND))
 def test_a_relay_and_second_time_constants_are_selected_and_recovered_within_10_percent(form):
-    """A direction relay (the two-branch hysteresis), two parallel heat paths, a two-exponential warm-up."""
+    """A direction relay (the two-branch hysteresis), two parallel heat paths, a two-exponential warm-up, a dT/dt
+    sensitivity that saturates at 0.3 degC/min (the cycle ramps at up to 0.67)."""
     t = np.arange(0, 21600.0)
     T = _chamber(t, *CYCLE)
     changes, terms, truth = SECOND[form]
@@ -151,6 +156,15 @@ def test_a_relay_and_second_time_constants_are_selected_and_recovered_within_10_
     for key, value in truth.items():
         where, name = key.split(":")
         assert (m.spec_ if where == "spec" else m.coef_)[name] == pytest.approx(value, rel=0.1), key
+
+
+def test_a_linear_dtdt_sensitivity_is_not_saturated():
+    t = np.arange(0, 21600.0)
+    T = _chamber(t, *CYCLE)
+    y, _ = _gyro(t, T, 2, tau_e=0.0, asym=0.0, play=0.0, warm=0.0)
+    m = GreyBoxDrift(grid_points=12, terms=("temp_rate", "rate_saturation")).fit([_run(t, T, y)])
+    assert [s["term"] for s in m.selection_] == ["temp_rate"] and m.spec_["rate_saturation_c_per_s"] == 0.0
+    assert m.coef_["rate"] == pytest.approx(1.5, rel=0.1)
 
 
 def test_a_second_time_constant_is_not_fitted_where_its_first_cannot_be():
@@ -280,6 +294,11 @@ def test_json_round_trip_is_exact_and_bad_files_are_refused(cycle_model):
     again = GreyBoxDrift.from_dict(json.loads(json.dumps(cycle_model.to_dict())))
     assert np.array_equal(again.predict(t, T), cycle_model.predict(t, T))
     d = cycle_model.to_dict()
+    version_2 = json.loads(json.dumps(d))  # before the saturation: a version-2 file has no such entry, and loads as linear
+    version_2["version"] = 2
+    del version_2["fitted"]["spec_"]["rate_saturation_c_per_s"]
+    del version_2["params"]["rate_saturation_c_per_s"]
+    assert np.array_equal(GreyBoxDrift.from_dict(version_2).predict(t, T), cycle_model.predict(t, T))
     with pytest.raises(InputError, match="newer than this gyrocomp reads"):
         GreyBoxDrift.from_dict({**d, "version": 99}, "m.json")
     with pytest.raises(InputError, match="non-finite"):
@@ -335,9 +354,10 @@ int main(void) {
 
 
 def _relay_and_second_time_constants(model):
-    """The fitted cycle model with a relay for its play and a second lag and warm-up (C against Python needs no fit)."""
+    """The fitted cycle model with a relay for its play, a second lag and warm-up and a saturating dT/dt (C against
+    Python needs no fit)."""
     d = json.loads(json.dumps(model.to_dict()))
-    d["fitted"]["spec_"] |= {"hysteresis_operator": "relay", "tau_e2_s": 2500.0, "tau_w2_s": 3000.0}
+    d["fitted"]["spec_"] |= {"hysteresis_operator": "relay", "tau_e2_s": 2500.0, "tau_w2_s": 3000.0, "rate_saturation_c_per_s": 0.004}
     coef = d["fitted"]["coef_"]
     coef |= {"relay": coef.pop("play"), "lag2": 0.05, "warmup2": 0.02}
     return GreyBoxDrift.from_dict(d)
@@ -379,7 +399,7 @@ def test_c_header_compiles_strictly_and_reproduces_python(cycle_model, tmp_path,
         worst = float(subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout)
         assert worst < bound, (real, worst)
     if variant != "fitted":
-        assert "s->br" in header and "s->te2" in header and header.count("exp(-(t - s->t_on)") == 2
+        assert "s->br" in header and "s->te2" in header and header.count("exp(-(t - s->t_on)") == 2 and "tanh(r / " in header
         return
     with pytest.raises(InputError, match=r"--static-part writes its cubic in T alone, which leaves 1 deg/h RMS"):
         export_model(model, "px4", ExportOptions())
