@@ -26,6 +26,7 @@ from gyrocomp.models._base import (
     finite_array,
     rmse,
 )
+from gyrocomp.models._nsga2elm_accept import REGIMES, cv_rmse, regime_rmse, regimes, sign_test, significant_everywhere
 from gyrocomp.models.elm import ACTIVATIONS, ELM
 from gyrocomp.errors import InputError
 
@@ -36,9 +37,6 @@ PICKS = ("knee", "min_rmse")
 
 ACCEPTS = ("sign_test", "always")
 """When the candidate replaces the plain ELM: better on significantly many cross-validated blocks, or always."""
-
-REGIMES = ("cooling", "soak", "heating")
-"""Thermal regimes of a sample, by the sign of the smoothed temperature slope (-1, 0, +1 in :func:`_regimes`)."""
 
 
 class NSGA2ELM(Learner):
@@ -359,12 +357,12 @@ class NSGA2ELM(Learner):
         self.plain_rmse_ = objectives(**plain)[0]
         plain_ridge, ridge = float(ELM().ridge), float(self.ridge)
         pair = ((plain, plain_ridge), (candidate, ridge))
-        self.cv_rmse_ = np.array([_cv_rmse(params, X, y, int(self.cv_folds), r, elm_seed) for params, r in pair])
-        self.p_value_ = _sign_test(self.cv_rmse_)
-        labels = _regimes(X[:, int(self.temperature_column)], float(self.regime_window), float(self.soak_fraction))
+        self.cv_rmse_ = np.array([cv_rmse(params, X, y, int(self.cv_folds), r, elm_seed) for params, r in pair])
+        self.p_value_ = sign_test(self.cv_rmse_)
+        labels = regimes(X[:, int(self.temperature_column)], float(self.regime_window), float(self.soak_fraction))
         self.regimes_ = [REGIMES[k + 1] for k in np.unique(labels)] if len(np.unique(labels)) > 1 else []
-        self.regime_rmse_ = np.array([_regime_rmse(params, X, y, labels, r, elm_seed) for params, r in pair])
-        accepted = self.accept == "always" or _significant_everywhere(
+        self.regime_rmse_ = np.array([regime_rmse(params, X, y, labels, r, elm_seed) for params, r in pair])
+        accepted = self.accept == "always" or significant_everywhere(
             self.p_value_, float(self.alpha), self.regime_rmse_ if self.regime_holdout else None
         )
         self.best_index_ = index if accepted else None
@@ -557,71 +555,3 @@ def _pick(front: list[dict[str, Any]], how: str, rmse_tolerance: float) -> int:
     span[span == 0] = 1.0
     distance = np.hypot(*((F - F.min(axis=0)) / span).T)
     return int(np.argmin(distance))  # first minimum: the smaller RMSE on ties
-
-
-def _cv_rmse(params: dict[str, Any], X: np.ndarray, y: np.ndarray, n_folds: int, ridge: float, seed: int) -> np.ndarray:
-    """Cross-validated RMSE per block of an ELM with `params` and `seed` (NSGA2ELM Notes, rule 3).
-
-    The samples, in time order, are cut into ``4 * n_folds`` contiguous
-    blocks; block j goes to fold ``j mod n_folds``. Each fold is predicted
-    by the ELM fitted on the other folds; returns the RMSE of each block's
-    predictions, shape ``(4 * n_folds,)``.
-    """
-    if len(y) < 4 * n_folds:
-        raise InputError(f"NSGA2ELM: {len(y)} samples cannot make 4 * cv_folds = {4 * n_folds} blocks")
-    blocks = np.array_split(np.arange(len(y)), 4 * n_folds)
-    fold = np.concatenate([np.full(len(block), j % n_folds) for j, block in enumerate(blocks)])
-    prediction = np.empty(len(y))
-    for k in range(n_folds):
-        elm = ELM(params["n_hidden"], params["activation"], params["weight_scale"], ridge, seed=seed)
-        prediction[fold == k] = elm.fit(X[fold != k], y[fold != k]).predict(X[fold == k])
-    return np.array([rmse(prediction[block], y[block]) for block in blocks])
-
-
-def _regimes(temperature: np.ndarray, window: float, soak_fraction: float) -> np.ndarray:
-    """Thermal regime of each sample: -1 cooling, 0 soak, +1 heating (NSGA2ELM Notes, rule 4).
-
-    The temperature, in time order, is smoothed by a centred moving mean of
-    ``max(3, round(window * n))`` samples (the ends padded with the end
-    values) and differenced (``numpy.gradient``); a sample is soak where the
-    magnitude of that slope is below `soak_fraction` times its 99th
-    percentile over the run, else heating or cooling by its sign. The slope
-    is per sample: its unit and the scaling of the column cancel in the
-    ratio.
-    """
-    n = len(temperature)
-    width = min(n, max(3, int(round(window * n))))
-    padded = np.pad(temperature, (width // 2, width - 1 - width // 2), mode="edge")
-    slope = np.gradient(np.convolve(padded, np.full(width, 1.0 / width), mode="valid")) if n > 1 else np.zeros(n)
-    threshold = soak_fraction * np.quantile(np.abs(slope), 0.99)
-    return np.where(slope > threshold, 1, np.where(slope < -threshold, -1, 0))
-
-
-def _regime_rmse(params: dict[str, Any], X: np.ndarray, y: np.ndarray, labels: np.ndarray, ridge: float, seed: int) -> np.ndarray:
-    """RMSE on each regime of `labels` held out whole, the ELM fitted on the others (NSGA2ELM Notes, rule 4).
-
-    One value per regime present, in increasing label order (cooling, soak,
-    heating); none when a single regime is present.
-    """
-    present = np.unique(labels)
-    if len(present) < 2:
-        return np.empty(0)
-    out = []
-    for regime in present:
-        held = labels == regime
-        elm = ELM(params["n_hidden"], params["activation"], params["weight_scale"], ridge, seed=seed)
-        out.append(rmse(elm.fit(X[~held], y[~held]).predict(X[held]), y[held]))
-    return np.array(out)
-
-
-def _significant_everywhere(p_value: float, alpha: float, regime_rmse: np.ndarray | None) -> bool:
-    """The ``sign_test`` verdict: p below `alpha` (rule 3) and, unless `regime_rmse` is None, row 1 below row 0 in every column (rule 4)."""
-    return p_value < alpha and (regime_rmse is None or bool(np.all(regime_rmse[1] < regime_rmse[0])))
-
-
-def _sign_test(block_rmse: np.ndarray) -> float:
-    """One-sided sign-test p-value that row 1 is below row 0 on more blocks than chance (ties count against)."""
-    from scipy.stats import binomtest
-
-    wins = int(np.sum(block_rmse[1] < block_rmse[0]))
-    return float(binomtest(wins, block_rmse.shape[1], 0.5, alternative="greater").pvalue)

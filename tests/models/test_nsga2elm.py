@@ -8,7 +8,9 @@ from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 
 from gyrocomp.models import ELM, NSGA2ELM
 from gyrocomp.models._base import block_split
-from gyrocomp.models.nsga2elm import _cv_rmse, _pick, _regime_rmse, _regimes, _sign_test, _significant_everywhere
+from gyrocomp.models._nsga2elm_accept import cv_rmse as _cv_rmse, regime_rmse as _regime_rmse, regimes as _regimes
+from gyrocomp.models._nsga2elm_accept import sign_test as _sign_test, significant_everywhere as _significant_everywhere
+from gyrocomp.models.nsga2elm import _pick
 
 
 def oven_run(seed: int, n: int = 600, noise: float = 0.1, tau_s: float = 150.0):
