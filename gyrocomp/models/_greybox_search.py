@@ -285,13 +285,15 @@ class Search:
                 break
             _, term, trial = best
             t_blocks, _, t_names = self.design(trial)
-            t_noise, t_dev, _ = self.fit_noise(t_blocks, noise)
-            t_score = self.bic(t_dev, self.n_params(trial, t_names, 3))
-            # The model without the term, refitted from the trial's noise levels: the noise fit is local (Nelder-Mead),
-            # and a better optimum it finds from a new start is no gain of the term's.
+            # The noise fit is local (Nelder-Mead) and the likelihood has several optima (white against flicker at the
+            # block scale): the trial starts from the model's levels and from its own residual's, the model is refitted
+            # from the trial's, and the trial again from the model's, so that a drop is the term's, not the optimiser's.
+            t_noise, t_dev = min((self.fit_noise(t_blocks, start)[:2] for start in (noise, None)), key=lambda r: r[1])
             b_noise, b_dev, _ = self.fit_noise(blocks, t_noise)
             if self.bic(b_dev, self.n_params(spec, names, 3)) < score:
                 noise, score = b_noise, self.bic(b_dev, self.n_params(spec, names, 3))
+                t_noise, t_dev = min([(t_noise, t_dev), self.fit_noise(t_blocks, b_noise)[:2]], key=lambda r: r[1])
+            t_score = self.bic(t_dev, self.n_params(trial, t_names, 3))
             upgrade = term == "temp_rate" and spec.rate_form > 0  # heating and cooling apart must pay, whatever `selection`
             if (m.selection == "bic" or upgrade) and score - t_score <= m.bic_margin:
                 if upgrade and m.selection == "all" and len(remaining) > 1:
