@@ -9,7 +9,10 @@ them:
   discretisation as :func:`gyrocomp.effects.shapes.element_temperature`:
   ``T_e <- a T_e + (1 - c) T + (c - a) T_prev``, ``a = exp(-h / tau)``,
   ``c = tau (1 - a) / h``); a second element temperature of another
-  time constant likewise (two paths for the heat, in parallel);
+  time constant likewise, a lag of T (two paths for the heat, in parallel)
+  or of ``T_e`` (two stages in series: the die inside the package inside
+  the housing; the hold then takes ``T_e`` linear between samples, exact
+  to second order in ``h / tau``);
 * a filtered temperature of time constant ``tau_r`` in the same way, whose
   derivative ``(T - T_f) / tau_r`` is the causal dT/dt (a first-order
   smoothed derivative: what firmware can compute, with no look-ahead);
@@ -70,7 +73,7 @@ def _relay(state, T, width):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e2, out):
+def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e2, series, out):
     """Columns ``T_e``, ``dT/dt``, hysteresis output, second ``T_e`` of each sample into `out` (n, 4); `state` updated in place.
 
     Parameters
@@ -87,6 +90,8 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
     relay : bool
         The hysteresis is a relay (output -1, 0, +1) rather than a play
         (output ``(T - p) / (w / 2)`` in [-1, 1]).
+    series : bool
+        The second element temperature lags ``T_e`` (in series), not T.
     out : ndarray, shape (n, 4)
     """
     h_weights = -1.0  # the step the weights below are for: a uniform log computes them once, not per sample
@@ -110,10 +115,14 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
                 a_r, c_r = _weights(h, tau_r)
                 a_2, c_2 = _weights(h, tau_e2)
                 h_weights = h
+            previous_e = state[3]
             state[3] = _hold(state[3], state[2], T, a_e, c_e)
             state[4] = _hold(state[4], state[2], T, a_r, c_r)
             state[5] = min(max(state[5], T - half_width), T + half_width)
-            state[9] = _hold(state[9], state[2], T, a_2, c_2)
+            if series:
+                state[9] = _hold(state[9], previous_e, state[3], a_2, c_2)
+            else:
+                state[9] = _hold(state[9], state[2], T, a_2, c_2)
         state[1] = t
         state[2] = T
         out[i, 0] = state[3]
@@ -133,11 +142,12 @@ def new_state() -> np.ndarray:
 
 
 @numba.njit(cache=True, error_model="numpy")
-def evaluate(raw, time_s, coef, centre, half, lo, hi, power_on_s, tau_w, tau_w2, rate_sat, out):
+def evaluate(raw, time_s, coef, centre, half, lo, hi, power_on_s, tau_w, tau_w2, rate_sat, element, out):
     """The drift [deg/s] of each sample from :func:`advance`'s columns, in one pass (no temporaries).
 
     ``out = b0 + ((c3 z + c2) z + c1) z + g r + a |r| + h H + l (T_e2 - T_e) / half
-    + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2)``, ``z = (clip(T_e, lo, hi) - centre) / half``,
+    + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2)``, ``z = (clip(T_e, lo, hi) - centre) / half``
+    (``T_e`` the column `element` of `raw`: 3, the second stage, for two lags in series),
     ``r`` the causal dT/dt or, with ``rate_sat`` > 0, ``rate_sat tanh(dT/dt / rate_sat)``
     (:func:`gyrocomp.effects.shapes.saturating_rate`),
     ``coef = (b0, c1, c2, c3, g, a, h, l, A, A2)`` (0 for an absent term; ``tau_w`` 0: no warm-up).
@@ -154,10 +164,12 @@ def evaluate(raw, time_s, coef, centre, half, lo, hi, power_on_s, tau_w, tau_w2,
         Power-on time and warm-up time constants [s].
     rate_sat : float
         Saturation rate of the dT/dt sensitivity [degC/s] (0: linear).
+    element : int
+        Column of `raw` the cubic is evaluated at: 0 (``T_e``), or 3 (two lags in series; ``l`` is then 0).
     out : ndarray, shape (n,)
     """
     for i in range(time_s.shape[0]):
-        te = raw[i, 0]
+        te = raw[i, element]
         z = (min(max(te, lo), hi) - centre) / half
         r = raw[i, 1]
         if rate_sat > 0.0:

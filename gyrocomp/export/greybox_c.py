@@ -11,7 +11,8 @@ step: the temperature bridged linearly, as ``bridge_gaps`` does):
   branch ``br`` (0 until the first excursion of ``w``; then -1 once T falls
   ``w`` below its highest since the last switch, +1 once it rises ``w``
   above its lowest);
-* a second element temperature ``T_e2`` as ``T_e``;
+* a second element temperature ``T_e2`` as ``T_e``, a lag of T (in
+  parallel) or of ``T_e`` (in series: the cubic is then of ``T_e2``);
 * ``drift = offset + sum_k c_k z^k + g dT/dt + a |dT/dt| + h play (or h br)
   + l (T_e2 - T_e) / half_range + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2)``,
   ``z = (clamp(T_e) - centre) / half_range``, ``dT/dt = (T - T_f) / tau_r``,
@@ -70,7 +71,8 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         terms.append(f"({P}_real){_num(coef['relay'])} * s->br")
     elif spec["width_c"]:
         terms.append(f"({P}_real){_num(coef['play'])} * (t_c - s->p) / ({P}_real){_num(0.5 * spec['width_c'])}")
-    if spec["tau_e_s"] and spec["tau_e2_s"]:
+    series = bool(spec["tau_e_s"] and spec["tau_e2_s"] and spec["second_lag_path"] == "series")
+    if spec["tau_e_s"] and spec["tau_e2_s"] and not series:
         terms.append(f"({P}_real){_num(coef['lag2'])} * (s->te2 - s->te) / ({P}_real){_num(e.half_range_c_)}")
     for key, tau in (("warmup", "tau_w_s"), ("warmup2", "tau_w2_s")):
         if spec["tau_w_s"] and spec[tau]:
@@ -80,7 +82,7 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         f"/* {prefix}.h: causal grey-box gyro drift compensation, written by gyrocomp export --format c.",
         " * compensated = rate - drift(state, t, T); rate in deg/s, T in degC, t in s (any steps; a gap bridges T linearly).",
         f" * terms: element lag tau_e = {spec['tau_e_s']:.6g} s, dT/dt filter {tau_r:g} s, play width {spec['width_c']:.6g} degC,",
-        f" * hysteresis operator {spec['hysteresis_operator']}, second element lag {spec['tau_e2_s']:.6g} s,",
+        f" * hysteresis operator {spec['hysteresis_operator']}, second element lag {spec['tau_e2_s']:.6g} s ({spec['second_lag_path']}),",
         f" * warm-up tau = {spec['tau_w_s']:.6g} s and {spec['tau_w2_s']:.6g} s, dT/dt saturation {spec['rate_saturation_c_per_s']:.6g} degC/s",
         " * (0: absent). Define GYROCOMP_REAL as float for single precision,",
         " * GYROCOMP_NO_CLAMP to extrapolate the cubic beyond the training range.",
@@ -116,12 +118,13 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         "    if (!s->started) {",
         "        s->started = 1; s->te = s->tf = s->p = s->hi = s->lo = s->te2 = t_c; s->br = 0; s->t_on = t;",
         "    } else {",
-        f"        const {P}_real h = t - s->t_prev;",
+        f"        const {P}_real h = t - s->t_prev, te_prev = s->te;",
         f"        s->te = {P}_hold(s->te, s->T_prev, t_c, h, ({P}_real){_num(spec['tau_e_s'])});",
         f"        s->tf = {P}_hold(s->tf, s->T_prev, t_c, h, ({P}_real){_num(tau_r)});",
         f"        if (s->p < t_c - ({P}_real){half}) s->p = t_c - ({P}_real){half};",
         f"        if (s->p > t_c + ({P}_real){half}) s->p = t_c + ({P}_real){half};",
-        f"        s->te2 = {P}_hold(s->te2, s->T_prev, t_c, h, ({P}_real){_num(spec['tau_e2_s'])});",
+        f"        s->te2 = {P}_hold(s->te2, {'te_prev, s->te' if series else 's->T_prev, t_c'}, h, ({P}_real){_num(spec['tau_e2_s'])});",
+        *([] if series else ["        (void)te_prev;"]),
         "    }",
         f"    if (s->br >= 0 && s->hi - t_c > ({P}_real){_num(spec['width_c'])}) {{ s->br = -1; s->lo = t_c; }}",
         f"    else if (s->br <= 0 && t_c - s->lo > ({P}_real){_num(spec['width_c'])}) {{ s->br = 1; s->hi = t_c; }}",
@@ -129,7 +132,7 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         "    if (t_c < s->lo) s->lo = t_c;",
         "    s->t_prev = t; s->T_prev = t_c;",
         f"    r = (t_c - s->tf) / ({P}_real){_num(tau_r)};",
-        "    te = s->te;",
+        f"    te = s->{'te2' if series else 'te'};",
         "#ifndef GYROCOMP_NO_CLAMP",
         f"    if (te < ({P}_real){_num(t_lo)}) te = ({P}_real){_num(t_lo)};",
         f"    if (te > ({P}_real){_num(t_hi)}) te = ({P}_real){_num(t_hi)};",

@@ -18,12 +18,15 @@ from scipy import linalg, optimize
 from gyrocomp.effects.shapes import first_excursion, hysteresis_branch
 from gyrocomp.errors import InputError
 from gyrocomp.identifiability import Refusal, separable
-from gyrocomp.models._greybox_state import JOINS, Spec, columns_of, kernel
+from gyrocomp.models._greybox_state import JOINS, Spec, columns_of, element_column, kernel
 
 __all__ = ["Prepared", "Search", "RATE_GRID_POINTS", "SATURATION_GRID_POINTS", "SETTLE_TAUS"]
 
 RATE_GRID_POINTS = 6
 """Points of the log grid of the dT/dt filter's time constant (then refined)."""
+
+SERIES_SHARES = (0.03, 0.06, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5)
+"""Shares of the first stage in the total time constant of two lags in series (then both refined)."""
 
 SATURATION_GRID_POINTS = 13
 """Points of the log grid of the dT/dt saturation rate (then refined)."""
@@ -103,7 +106,8 @@ class Prepared:
 
     def ranges(self, model, spec: Spec) -> tuple:
         raw = self.raw(spec, model.bridge_gaps)
-        return float(raw[:, 0].min()), float(raw[:, 0].max()), float(raw[:, 1].min()), float(raw[:, 1].max())
+        element = raw[:, element_column(spec)]
+        return float(element.min()), float(element.max()), float(raw[:, 1].min()), float(raw[:, 1].max())
 
 
 def block_means(x: np.ndarray, block_of: np.ndarray, n_blocks: int) -> np.ndarray:
@@ -214,6 +218,10 @@ class Search:
         if term == "thermal_lag":
             lag = [block_means(self._raw_of(i, trial)[:, 0] - r.temperature_c, r.block_of, r.n_blocks) for i, r in enumerate(self.runs)]
             added = {"thermal_lag (T_e - T)": np.concatenate(lag)}
+        elif term == "second_lag" and trial.series:  # the cubic moves from T_e to the second stage: judge the difference
+            stage = [block_means(self._raw_of(i, trial)[:, 3] - self._raw_of(i, trial)[:, 0], r.block_of, r.n_blocks)
+                     for i, r in enumerate(self.runs)]
+            added = {"second_lag (T_e2 - T_e, in series)": np.concatenate(stage)}
         elif term == "rate_saturation":  # the saturated dT/dt replaces the linear one: judge what it adds
             saturated = self._stacked(trial)
             added = {f"rate_saturation ({n}: saturated less linear)": saturated[n] - base[n] for n in ("rate", "rate_abs") if n in base}
@@ -223,21 +231,24 @@ class Search:
         return next((r for r in refused if r.term in added), None)
 
     def _raw_of(self, i: int, spec: Spec) -> np.ndarray:
-        key = (i, spec.tau_e, spec.width, spec.tau_r, spec.relay, spec.tau_e2)
+        key = (i, spec.tau_e, spec.width, spec.tau_r, spec.relay, spec.tau_e2, spec.series)
         if key not in self._raw:
-            states = Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r, spec.relay, spec.tau_e2)
+            states = Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r, spec.relay, spec.tau_e2, series=spec.series)
             self._raw[key] = self.runs[i].raw(states, self.model.bridge_gaps)
         return self._raw[key]
 
     # search -------------------------------------------------------------------
-    def grids(self) -> dict:
+    def grids(self, spec: Spec) -> dict:
+        """Each term's candidate changes to `spec`. Two lags in series are searched about the lag `spec` holds: a single
+        lag's time constant is their sum (the mean delay), so the grid is of the first stage's share of it."""
         m = self.model
+        series = [{"tau_e": f * spec.tau_e, "tau_e2": (1 - f) * spec.tau_e, "series": True} for f in SERIES_SHARES] if spec.tau_e else []
         return {
             "thermal_lag": [{"tau_e": float(v)} for v in np.geomspace(*m.lag_tau_s, m.grid_points)],
             "temp_rate": [{"rate_form": form, "tau_r": float(v)} for form in (1, 2) for v in np.geomspace(*m.rate_tau_s, RATE_GRID_POINTS)],
             "hysteresis": [{"width": float(v), "relay": relay} for relay in (False, True) for v in m.widths_c],
             "warmup": [{"tau_w": float(v)} for v in np.geomspace(*m.warmup_tau_s, m.grid_points)],
-            "second_lag": _pairs("tau_e", "tau_e2", np.geomspace(*m.lag_tau_s, m.grid_points)),
+            "second_lag": _pairs("tau_e", "tau_e2", np.geomspace(*m.lag_tau_s, m.grid_points)) + series,
             "second_warmup": _pairs("tau_w", "tau_w2", np.geomspace(*m.warmup_tau_s, m.grid_points)),
             "rate_saturation": [{"rate_sat": float(v)} for v in np.geomspace(*m.rate_saturation_c_per_s, SATURATION_GRID_POINTS)],
         }
@@ -254,7 +265,7 @@ class Search:
             not_fitted["warmup"] = (
                 "warmup not fitted: a training run does not start at power-on and gives no power-on time, so the time since power-on is unknown"
             )
-        grids = self.grids()
+        grids = self.grids(spec)
         for term in m.terms:  # judged against the baseline: a term no parameter of its grid separates from it
             if term in not_fitted or term in JOINS:  # a joining term is judged beside the term it joins, once that is in
                 continue
@@ -268,6 +279,7 @@ class Search:
         steps = []
         while remaining:
             best = None
+            grids = self.grids(spec)
             for term in remaining:
                 for change in grids[term]:
                     if term == "temp_rate" and change["rate_form"] <= spec.rate_form:
@@ -284,6 +296,7 @@ class Search:
             if best is None:
                 break
             _, term, trial = best
+            trial = self.refine(trial, noise)  # the BIC is of the maximum likelihood, not of a grid point
             t_blocks, _, t_names = self.design(trial)
             # The noise fit is local (Nelder-Mead) and the likelihood has several optima (white against flicker at the
             # block scale): the trial starts from the model's levels and from its own residual's, the model is refitted
@@ -333,8 +346,8 @@ class Search:
         m = self.model
         ranges = {"tau_e": m.lag_tau_s, "tau_w": m.warmup_tau_s, "width": (min(m.widths_c), max(m.widths_c)), "tau_r": m.rate_tau_s,
                   "tau_e2": m.lag_tau_s, "tau_w2": m.warmup_tau_s, "rate_sat": m.rate_saturation_c_per_s}
-        without = {"tau_e": {"tau_e": 0.0, "tau_e2": 0.0}, "tau_w": {"tau_w": 0.0, "tau_w2": 0.0}, "width": {"width": 0.0},
-                   "tau_r": {"rate_form": 0, "tau_r": 0.0, "rate_sat": 0.0}, "tau_e2": {"tau_e2": 0.0}, "tau_w2": {"tau_w2": 0.0},
+        without = {"tau_e": {"tau_e": 0.0, "tau_e2": 0.0, "series": False}, "tau_w": {"tau_w": 0.0, "tau_w2": 0.0}, "width": {"width": 0.0},
+                   "tau_r": {"rate_form": 0, "tau_r": 0.0, "rate_sat": 0.0}, "tau_e2": {"tau_e2": 0.0, "series": False}, "tau_w2": {"tau_w2": 0.0},
                    "rate_sat": {"rate_sat": 0.0}}
         for _ in range(2):
             for key, factor in spacing.items():
@@ -355,6 +368,25 @@ class Search:
                 base = dataclasses.replace(spec, **without[key])
                 if result.fun < deviance(math.log(value)) and self.identified(base, trial, terms[key]) is None:
                     spec = trial
+        return self._series_ridge(spec, noise)
+
+    def _series_ridge(self, spec: Spec, noise) -> Spec:
+        """Two lags in series, jointly (Nelder-Mead in their logarithms): their deviance has a narrow ridge along a
+        constant sum, which a search of one time constant at a time climbs only in small steps."""
+        if not (spec.series and spec.tau_e and spec.tau_e2):
+            return spec
+        lo, hi = (math.log(v) for v in self.model.lag_tau_s)
+
+        def deviance(logs):
+            a, b = np.exp(np.clip(logs, lo, hi))
+            return self.deviance(self.design(dataclasses.replace(spec, tau_e=float(min(a, b)), tau_e2=float(max(a, b))))[0], noise)[0]
+
+        start = np.log([spec.tau_e, spec.tau_e2])
+        result = optimize.minimize(deviance, start, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 0.01, "maxiter": 200})
+        a, b = np.exp(np.clip(result.x, lo, hi))
+        trial = dataclasses.replace(spec, tau_e=float(min(a, b)), tau_e2=float(max(a, b)))
+        if result.fun < deviance(start) and self.identified(dataclasses.replace(spec, tau_e2=0.0, series=False), trial, "second_lag") is None:
+            return trial
         return spec
 
     def final(self, spec: Spec):
@@ -376,7 +408,7 @@ def _params(spec: Spec, term: str) -> dict:
         "temp_rate": {"heating_cooling_apart": spec.rate_form == 2, "filter_tau_s": spec.tau_r},
         "hysteresis": {"width_c": spec.width, "operator": "relay" if spec.relay else "play"},
         "warmup": {"tau_s": spec.tau_w},
-        "second_lag": {"tau_s": spec.tau_e2},
+        "second_lag": {"tau_s": spec.tau_e2, "path": "series" if spec.series else "parallel"},
         "second_warmup": {"tau_s": spec.tau_w2},
         "rate_saturation": {"saturation_c_per_s": spec.rate_sat},
     }[term]

@@ -14,7 +14,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["TERMS", "JOINS", "Spec", "kernel", "columns_of"]
+__all__ = ["TERMS", "JOINS", "Spec", "kernel", "columns_of", "element_column"]
 
 TERMS = ("thermal_lag", "temp_rate", "hysteresis", "warmup", "second_lag", "second_warmup", "rate_saturation")
 """The model's optional terms, in the order they are judged: the vocabulary's names, then a second time constant
@@ -38,6 +38,7 @@ class Spec:
     tau_e2: float = 0.0  # a second element time constant (with tau_e)
     tau_w2: float = 0.0  # a second warm-up time constant (with tau_w)
     rate_sat: float = 0.0  # the dT/dt sensitivity saturates: s tanh(dT/dt / s), s in degC/s (with rate_form)
+    series: bool = False  # the second element lag is in series with the first (the cubic at its output), not in parallel
 
     def terms(self) -> list[str]:
         present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0, self.tau_e2 > 0, self.tau_w2 > 0, self.rate_sat > 0)
@@ -54,8 +55,13 @@ def kernel(time_s, temperature_c, state, spec: Spec) -> np.ndarray:
 
     out = np.empty((time_s.size, 4))
     advance(time_s, temperature_c, state, float(spec.tau_e), float(spec.tau_r or 1.0), 0.5 * float(spec.width), bool(spec.relay),
-            float(spec.tau_e2), out)
+            float(spec.tau_e2), bool(spec.series), out)
     return out
+
+
+def element_column(spec: Spec) -> int:
+    """The kernel's column the cubic is evaluated at: the second stage's temperature for two lags in series, else T_e."""
+    return 3 if spec.series and spec.tau_e and spec.tau_e2 else 0
 
 
 def columns_of(raw, time_s, spec: Spec, power_on_s, centre, half, degree) -> dict:
@@ -67,8 +73,10 @@ def columns_of(raw, time_s, spec: Spec, power_on_s, centre, half, degree) -> dic
     (the hysteresis operator's output), ``warmup`` and ``warmup2``
     (``exp(-t_on / tau)``) and ``lag2`` (the second element temperature
     less the first, scaled as z: the second path's share of the drift).
+    Two lags in series have no ``lag2``: the powers are of the second
+    stage's temperature.
     """
-    z = (raw[:, 0] - centre) / half
+    z = (raw[:, element_column(spec)] - centre) / half
     columns = {f"z{k}": z**k for k in range(1, degree + 1)}
     if spec.rate_form:
         from gyrocomp.effects.shapes import saturating_rate  # scipy.signal: only a fit needs it, compensation evaluates in numba
@@ -83,6 +91,6 @@ def columns_of(raw, time_s, spec: Spec, power_on_s, centre, half, degree) -> dic
         columns["warmup"] = np.exp(-(time_s - power_on_s) / spec.tau_w)
     if spec.tau_w and spec.tau_w2:
         columns["warmup2"] = np.exp(-(time_s - power_on_s) / spec.tau_w2)
-    if spec.tau_e and spec.tau_e2:
+    if spec.tau_e and spec.tau_e2 and not spec.series:
         columns["lag2"] = (raw[:, 3] - raw[:, 0]) / half
     return columns

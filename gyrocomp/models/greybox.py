@@ -61,7 +61,7 @@ import numpy as np
 
 from gyrocomp.errors import InputError
 from gyrocomp.models._base import NotFittedError, Params
-from gyrocomp.models._greybox_state import JOINS, TERMS, Spec, kernel
+from gyrocomp.models._greybox_state import JOINS, TERMS, Spec, element_column, kernel
 
 __all__ = ["GreyBoxDrift", "GreyBoxStream", "TrainingRun", "TERMS"]
 
@@ -134,7 +134,8 @@ class GreyBoxDrift(Params):
     spec_ : dict
         ``tau_e_s``, ``rate_form`` (0, 1, 2), ``width_c``, ``tau_w_s``,
         ``rate_tau_s``, ``hysteresis_operator``, ``tau_e2_s``, ``tau_w2_s``,
-        ``rate_saturation_c_per_s`` (0: a term absent).
+        ``rate_saturation_c_per_s`` (0: a term absent), ``second_lag_path``
+        (``parallel`` or ``series``).
     coef_ : dict of str to float
         Column coefficients [deg/s per column unit]: ``z1..z3``, ``rate``,
         ``rate_abs``, ``play``, ``warmup``.
@@ -244,7 +245,7 @@ class GreyBoxDrift(Params):
             beta, names, noise = search.final(spec)
         self.spec_ = {"tau_e_s": spec.tau_e, "rate_form": spec.rate_form, "width_c": spec.width, "tau_w_s": spec.tau_w, "rate_tau_s": spec.tau_r,
                       "hysteresis_operator": "relay" if spec.relay else "play", "tau_e2_s": spec.tau_e2, "tau_w2_s": spec.tau_w2,
-                      "rate_saturation_c_per_s": spec.rate_sat}
+                      "rate_saturation_c_per_s": spec.rate_sat, "second_lag_path": "series" if spec.series else "parallel"}
         n_runs = len(prepared)
         self.run_offsets_ = [float(b) for b in beta[:n_runs]]
         weights = np.array([p.duration_s for p in prepared])
@@ -338,7 +339,7 @@ class GreyBoxDrift(Params):
     def _check_loaded(self, name: str) -> None:
         self.spec_ = {**_ADDED_SPEC, **self.spec_}  # an older file: a play, no second time constants, no saturation
         numbers = [self.offset_, self.centre_c_, self.half_range_c_, *self.coef_.values(),
-                   *(v for k, v in self.spec_.items() if k != "hysteresis_operator"),
+                   *(v for k, v in self.spec_.items() if k not in _CHOICES),
                    *self.temperature_range_c_, *self.rate_range_c_per_s_]
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in numbers):
             raise InputError(f"{name}: greybox model holds a non-finite or non-numeric parameter")
@@ -350,21 +351,25 @@ class GreyBoxDrift(Params):
         if set(spec) != set(_ADDED_SPEC) | {"tau_e_s", "rate_form", "width_c", "tau_w_s", "rate_tau_s"}:
             raise InputError(f"{name}: greybox spec_ keys {sorted(spec)}; expected tau_e_s, rate_form, width_c, tau_w_s, rate_tau_s, "
                              f"{', '.join(_ADDED_SPEC)}")
-        numbers = {k: v for k, v in spec.items() if k != "hysteresis_operator"}
+        numbers = {k: v for k, v in spec.items() if k not in _CHOICES}
         if (self.half_range_c_ <= 0 or any(v < 0 for v in numbers.values()) or spec["rate_form"] not in (0, 1, 2)
-                or (spec["rate_form"] and not spec["rate_tau_s"] > 0) or spec["hysteresis_operator"] not in ("play", "relay")):
+                or (spec["rate_form"] and not spec["rate_tau_s"] > 0) or any(spec[k] not in v for k, v in _CHOICES.items())):
             raise InputError(f"{name}: greybox spec {self.spec_} out of range")
 
     def spec(self) -> Spec:
         """The fitted nonlinear specification (:class:`~gyrocomp.models._greybox_state.Spec`)."""
         s = self.spec_
         return Spec(s["tau_e_s"], s["rate_form"], s["width_c"], s["tau_w_s"], s["rate_tau_s"], s["hysteresis_operator"] == "relay",
-                    s["tau_e2_s"], s["tau_w2_s"], s["rate_saturation_c_per_s"])
+                    s["tau_e2_s"], s["tau_w2_s"], s["rate_saturation_c_per_s"], s["second_lag_path"] == "series")
 
 
-_ADDED_SPEC = {"hysteresis_operator": "play", "tau_e2_s": 0.0, "tau_w2_s": 0.0, "rate_saturation_c_per_s": 0.0}
-"""The spec entries versions 2 (the relay, the second time constants) and 3 (the saturation) added, at the values
-an older model holds."""
+_ADDED_SPEC = {"hysteresis_operator": "play", "tau_e2_s": 0.0, "tau_w2_s": 0.0, "rate_saturation_c_per_s": 0.0, "second_lag_path": "parallel"}
+"""The spec entries versions 2 (the relay, the second time constants) and 3 (the saturation, lags in series) added,
+at the values an older model holds."""
+
+
+_CHOICES = {"hysteresis_operator": ("play", "relay"), "second_lag_path": ("parallel", "series")}
+"""The spec entries that name a form, and the names they take."""
 
 
 class GreyBoxStream:
@@ -384,6 +389,7 @@ class GreyBoxStream:
         self.power_on_s = power_on_s
         self.clamp = clamp
         self.state = new_state()
+        self.element = element_column(model.spec())
         c = model.coef_
         hysteresis = c.get("relay" if model.spec_["hysteresis_operator"] == "relay" else "play", 0.0)
         self.coef = np.array([model.offset_, *(c.get(f"z{k}", 0.0) for k in (1, 2, 3)), c.get("rate", 0.0), c.get("rate_abs", 0.0),
@@ -406,5 +412,5 @@ class GreyBoxStream:
         lo, hi = m.temperature_range_c_ if self.clamp else (-math.inf, math.inf)
         out = np.empty(time_s.size)
         evaluate(raw, time_s, self.coef, m.centre_c_, m.half_range_c_, lo, hi, self.power_on_s, m.spec_["tau_w_s"], m.spec_["tau_w2_s"],
-                 m.spec_["rate_saturation_c_per_s"], out)
+                 m.spec_["rate_saturation_c_per_s"], self.element, out)
         return out

@@ -61,9 +61,11 @@ def _relay(T, width, start=1.0):
 
 
 def _gyro(t, T, seed, *, tau_e=400.0, rate=1.5, asym=0.5, play=0.01, width=4.0, warm=0.03, tau_w=900.0, rrw=2e-6,
-          relay=0.0, lag2=0.0, tau_e2=3000.0, warm2=0.0, tau_w2=4000.0, sat=0.0):
+          relay=0.0, lag2=0.0, tau_e2=3000.0, warm2=0.0, tau_w2=4000.0, sat=0.0, series=False):
     rng = np.random.default_rng(seed)
     Te = _lag(t, T, tau_e)
+    if series:  # the die behind a second stage: the cubic of the lag of T_e
+        Te = _lag(t, Te, tau_e2)
     d = Te - 25.0
     bias = 0.05 + 2e-3 * d - 3e-5 * d**2 + 4e-7 * d**3
     r = np.gradient(T, t)
@@ -125,6 +127,8 @@ SECOND = {  # the forms a single term cannot hold, each with its own term beside
     "second_lag": (dict(rate=0.0, asym=0.0, play=0.0, warm=0.0, lag2=2e-3), ("thermal_lag", "second_lag"),
                    {"spec:tau_e_s": 400.0, "spec:tau_e2_s": 3000.0}),
     "second_warmup": (dict(tau_e=0.0, rate=0.0, asym=0.0, play=0.0, warm=0.03, warm2=0.02), ("warmup", "second_warmup"), {}),
+    "series_lags": (dict(tau_e=300.0, rate=0.0, asym=0.0, play=0.0, warm=0.0, series=True, tau_e2=1500.0), ("thermal_lag", "second_lag"),
+                    {"spec:tau_e_s": 300.0, "spec:tau_e2_s": 1500.0}),
     "rate_saturation": (dict(tau_e=0.0, asym=0.0, play=0.0, warm=0.0, sat=0.005), ("temp_rate", "rate_saturation"),
                         {"spec:rate_saturation_c_per_s": 0.005, "coef:rate": 1.5}),
 }
@@ -142,6 +146,7 @@ def test_a_relay_and_second_time_constants_are_selected_and_recovered_within_10_
     assert sorted(s["term"] for s in m.selection_) == sorted(terms) and m.not_fitted_ == []
     if form == "relay":
         assert m.spec_["hysteresis_operator"] == "relay"
+    assert m.spec_["second_lag_path"] == ("series" if form == "series_lags" else "parallel")
     if form == "second_warmup":
         # The curve within 3 % of its amplitude (measured 1.4-3.1 deg/h of 180 on three seeds), the time constants
         # within 25 %: the slow one trades against the cubic in T, the cycle heating from its 30th minute
@@ -260,18 +265,19 @@ def test_a_lag_shorter_than_a_smooth_transition_is_refused():
 def test_the_stateful_kernel_equals_the_registry_shapes_and_chunks_give_the_same_bytes():
     t = np.arange(0.0, 3000.0)
     T = _chamber(t, [0, 500, 1500, 2000, 3000], [20, 30, 22, 28, 21], tau_s=60.0)
-    for relay, operator in ((False, shapes.hysteresis_play), (True, shapes.hysteresis_branch)):
+    for relay, operator, series in ((False, shapes.hysteresis_play, False), (True, shapes.hysteresis_branch, True)):
         out = np.empty((t.size, 4))
-        advance(t, T, new_state(), 120.0, 30.0, 1.5, relay, 700.0, out)
-        np.testing.assert_allclose(out[:, 0], shapes.element_temperature(t, T, 120.0), rtol=0, atol=1e-10)
-        np.testing.assert_allclose(out[:, 3], shapes.element_temperature(t, T, 700.0), rtol=0, atol=1e-10)
+        advance(t, T, new_state(), 120.0, 30.0, 1.5, relay, 700.0, series, out)
+        te = shapes.element_temperature(t, T, 120.0)
+        np.testing.assert_allclose(out[:, 0], te, rtol=0, atol=1e-10)
+        np.testing.assert_allclose(out[:, 3], shapes.element_temperature(t, te if series else T, 700.0), rtol=0, atol=1e-10)
         np.testing.assert_allclose(out[:, 1], (T - shapes.element_temperature(t, T, 30.0)) / 30.0, rtol=0, atol=1e-10)
         first = shapes.first_excursion(T, 3.0)  # the relay's branch is unknown (0) before it; the play starts centred
         np.testing.assert_allclose(out[first:, 2], operator(t, T, 3.0)[first:], rtol=0, atol=1e-12)
         assert not relay or (np.all(out[:first, 2] == 0.0) and first > 0)
         state, chunks = new_state(), np.empty_like(out)
         for lo in range(0, t.size, 777):
-            advance(t[lo : lo + 777], T[lo : lo + 777], state, 120.0, 30.0, 1.5, relay, 700.0, chunks[lo : lo + 777])
+            advance(t[lo : lo + 777], T[lo : lo + 777], state, 120.0, 30.0, 1.5, relay, 700.0, series, chunks[lo : lo + 777])
         assert np.array_equal(chunks, out)
 
 
@@ -353,22 +359,23 @@ int main(void) {
 """
 
 
-def _relay_and_second_time_constants(model):
+def _relay_and_second_time_constants(model, path="parallel"):
     """The fitted cycle model with a relay for its play, a second lag and warm-up and a saturating dT/dt (C against
     Python needs no fit)."""
     d = json.loads(json.dumps(model.to_dict()))
-    d["fitted"]["spec_"] |= {"hysteresis_operator": "relay", "tau_e2_s": 2500.0, "tau_w2_s": 3000.0, "rate_saturation_c_per_s": 0.004}
+    d["fitted"]["spec_"] |= {"hysteresis_operator": "relay", "tau_e2_s": 2500.0, "tau_w2_s": 3000.0, "rate_saturation_c_per_s": 0.004,
+                             "second_lag_path": path}
     coef = d["fitted"]["coef_"]
-    coef |= {"relay": coef.pop("play"), "lag2": 0.05, "warmup2": 0.02}
+    coef |= {"relay": coef.pop("play"), "warmup2": 0.02} | ({"lag2": 0.05} if path == "parallel" else {})
     return GreyBoxDrift.from_dict(d)
 
 
-@pytest.mark.parametrize("variant", ["fitted", "relay_and_second_time_constants"])
+@pytest.mark.parametrize("variant", ["fitted", "relay_and_second_time_constants", "series"])
 def test_the_compiled_evaluation_is_the_design_columns_times_their_coefficients(cycle_model, variant):
     """The stream sums the model in one compiled pass; the fit sees its columns: both must be one model (1e-12 deg/s)."""
     from gyrocomp.models._greybox_state import columns_of, kernel
 
-    m = cycle_model if variant == "fitted" else _relay_and_second_time_constants(cycle_model)
+    m = cycle_model if variant == "fitted" else _relay_and_second_time_constants(cycle_model, "series" if variant == "series" else "parallel")
     t = np.arange(0.0, 20000.0, 0.5)
     T = _chamber(t, [0, 3000, 9000, 12000, 20000], [20, 45, -5, 30, 30])  # within the training range: no clamp
     raw = kernel(t, T, new_state(), m.spec())
@@ -379,14 +386,14 @@ def test_the_compiled_evaluation_is_the_design_columns_times_their_coefficients(
 
 
 @pytest.mark.skipif(CC is None, reason="no C compiler")
-@pytest.mark.parametrize("variant", ["fitted", "relay_and_second_time_constants"])
+@pytest.mark.parametrize("variant", ["fitted", "relay_and_second_time_constants", "series"])
 def test_c_header_compiles_strictly_and_reproduces_python(cycle_model, tmp_path, variant):
     """-std=c99 -Wall -Werror -pedantic; 1e-9 deg/s in double over a sweep beyond the range with a gap."""
     from gyrocomp.export import ExportOptions, export_model
     from gyrocomp.pipeline.greybox import GreyBoxModel
 
     obj = {"training": {"temperature_c": {"min": -10.0, "max": 60.0}}, "static_part": {"cost_deg_h": {"rms": 1.0, "max": 2.0}}}
-    estimator = cycle_model if variant == "fitted" else _relay_and_second_time_constants(cycle_model)
+    estimator = cycle_model if variant == "fitted" else _relay_and_second_time_constants(cycle_model, "series" if variant == "series" else "parallel")
     model = GreyBoxModel(obj, "m.json", estimator, True)
     header, summary = export_model(model, "c", ExportOptions(n_vectors=1500))
     assert summary["n_vectors"] == 1500
@@ -400,6 +407,7 @@ def test_c_header_compiles_strictly_and_reproduces_python(cycle_model, tmp_path,
         assert worst < bound, (real, worst)
     if variant != "fitted":
         assert "s->br" in header and "s->te2" in header and header.count("exp(-(t - s->t_on)") == 2 and "tanh(r / " in header
+        assert ("te = s->te2;" in header) == (variant == "series")
         return
     with pytest.raises(InputError, match=r"--static-part writes its cubic in T alone, which leaves 1 deg/h RMS"):
         export_model(model, "px4", ExportOptions())
