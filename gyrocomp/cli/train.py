@@ -109,6 +109,8 @@ def greybox_line(fitted: dict) -> str:
     parts = []
     if spec["tau_e_s"]:
         parts.append(f"thermal_lag tau {spec['tau_e_s']:.4g} s")
+    if spec.get("tau_e2_s"):
+        parts.append(f"second_lag tau {spec['tau_e2_s']:.4g} s ({spec.get('second_lag_path', 'parallel')})")
     if spec["rate_form"]:
         saturation = spec.get("rate_saturation_c_per_s", 0.0)
         parts.append("temp_rate" + (" heating/cooling apart" if spec["rate_form"] == 2 else "") + f" (filter {spec['rate_tau_s']:.3g} s"
@@ -116,6 +118,6 @@ def greybox_line(fitted: dict) -> str:
     if spec["width_c"]:
         parts.append(f"hysteresis width {spec['width_c']:.3g} degC")
     if spec["tau_w_s"]:
-        parts.append(f"warmup tau {spec['tau_w_s']:.4g} s")
+        parts.append(f"warmup tau {spec['tau_w_s']:.4g} s" + (f" and {spec['tau_w2_s']:.4g} s" if spec.get("tau_w2_s") else ""))
     return "greybox: cubic in T_e" + "".join(f" + {p}" for p in parts)
 

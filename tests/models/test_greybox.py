@@ -432,3 +432,14 @@ def test_diagnose_model_out_fits_the_selected_effects_it_can_hold():
     assert fitted["spec_"]["tau_w_s"] > 0 and fitted["coef_"]["warmup"] == pytest.approx(0.03, rel=0.1)
     assert left_out == {"terms": ["thermal_lag", "warmup"], "not_held": ["bias_instability", "periodic"], "not_fitted": [],
                         "unexplained_structure": True}
+
+
+def test_train_names_every_selected_term_and_its_parameters_in_one_line():
+    from gyrocomp.cli.train import greybox_line
+
+    spec = {"tau_e_s": 297.0, "tau_e2_s": 1502.0, "second_lag_path": "series", "rate_form": 2, "rate_tau_s": 12.0,
+            "rate_saturation_c_per_s": 0.01, "width_c": 0.0, "tau_w_s": 900.0, "tau_w2_s": 4000.0}
+    assert greybox_line({"spec_": spec}) == (
+        "greybox: cubic in T_e + thermal_lag tau 297 s + second_lag tau 1502 s (series)"
+        " + temp_rate heating/cooling apart (filter 12 s, saturating at 0.6 degC/min) + warmup tau 900 s and 4000 s"
+    )
