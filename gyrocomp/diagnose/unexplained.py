@@ -6,65 +6,15 @@ shapes and its noise -- does not predict (issue #16, part 2). On each run
 the block means ``y`` are regressed on the model's design ``X`` by GLS under
 the model's noise ``Sigma`` (the levels of its noise terms refitted on that
 run by maximum likelihood), and whitened by the Cholesky factor ``L``:
-``e = L^-1 (y - X beta)`` is ``N(0, I - P)`` when the model holds. Each
-test below is then exact (or conservative) with a known false-alarm rate:
-
-* ``temperature`` -- a function of temperature beyond the model's:
-  indicators of ``temperature_bins`` equal-width temperature bins; score,
-  ``chi^2_q``; and, for a structure narrower than a bin (a dip over a few
-  degC), a scan of the single bins of ``temperature_scan_bins`` equal-width
-  binnings (bins of fewer than ``min_step_blocks`` blocks left out), each
-  bin's whitened score ``z`` ``N(0, 1)`` under the model, the union bound
-  ``n 2 Phi(-max |z|)``; the two make one test, ``p = 2 min`` of theirs;
-* ``heating_cooling`` -- a different offset or slope in temperature when
-  heating and when cooling (``|dT/dt|`` above ``soak_rate_c_per_min``);
-  score, ``chi^2_q``;
-* ``power_on`` -- a settling after power-on: indicators of the windows
-  ``poweron_edges_s``; score, ``chi^2_q``;
-* ``time`` -- a drift in time: indicators of ``time_segments`` equal
-  segments of the run; score, ``chi^2_q``;
-* ``step`` -- a step at an unknown time
-  (:func:`gyrocomp.diagnose.signature.step_scan`); union bound over times;
-* ``temperature_step`` -- a step at an unknown temperature, the same when
-  heating and when cooling (a bias discontinuity: a mode that switches at
-  one temperature, a solder or package transition): the column
-  ``1[T >= c]`` at each inner edge ``c`` of ``temperature_step_bins``
-  equal-width bins (at least ``min_step_blocks`` blocks on either side),
-  its whitened score ``z`` ``N(0, 1)`` under the model, the union bound
-  ``n 2 Phi(-max |z|)``. A run that crosses ``c`` several times shows it
-  as several steps in time, and a hysteresis (which switches with the
-  direction of the temperature change, wherever that is) takes part of it;
-* ``spectral_line`` -- a sinusoid at an unknown frequency (at least
-  ``line_min_cycles`` cycles in the run): Fisher's ``g`` of the periodogram
-  of ``e``, ``P = m (1 - g)^(m-1)`` [1]_;
-* ``moving_line`` -- a line whose frequency moves (a tone that drifts with
-  temperature or age, a chirp) or that comes and goes: Fisher's ``g`` in
-  each of ``line_segments`` consecutive segments of ``e`` (at least
-  ``line_min_cycles`` cycles in a segment), Bonferroni over the segments,
-  ``P = min(1, K min_k P_k)``. A drifting line spreads its power over many
-  Fourier frequencies of the whole run, where the ``spectral_line`` test
-  does not see it, and a flicker or random walk absorbs it: a stationary
-  noise has the same spectrum in every segment;
-* ``noise_correlation`` -- a correlated noise the model's noise terms do
-  not take (a telegraph noise under white noise, a wander the noise
-  terms' signature refused): Ljung-Box ``Q`` of ``e`` over
-  ``whiteness_lags`` lags, ``chi^2_h`` (:func:`gyrocomp.diagnose.signature.ljung_box`);
-* ``noise_blocks`` -- a block-level noise that changes over the run: the
-  Brown-Forsythe test of the spread of ``e`` in ``noise_segments``
-  segments, ``F_(k-1, n-k)`` [2]_;
-* ``noise_samples`` -- a sample-level (white) noise that changes: the same
-  test on the paired differences ``x_(2j+1) - x_(2j)`` within blocks
-  (independent under white noise; every slow term cancels), in the same
-  segments;
-* ``noise_temperature`` -- a white noise that depends on temperature: the
-  same pairs grouped by the temperature bins.
-
-The score statistic of whitened columns ``G`` is ``|U' e|^2`` with ``U`` an
-orthonormal basis of the part of ``L^-1 G`` orthogonal to ``L^-1 X``
-(:func:`gyrocomp.diagnose.signature.score_test`). The three noise tests also
-ask for a size: one group's (robust) standard deviation differs from another's by
-the factor ``noise_min_ratio`` (at 100 Hz a change of 1 % is significant
-and of no consequence); this only lowers their false-alarm rate.
+``e = L^-1 (y - X beta)`` is ``N(0, I - P)`` when the model holds. The
+verdict is a room over the registry of residual checks
+(:mod:`gyrocomp.diagnose.checks`, :data:`~gyrocomp.diagnose.checks.RESIDUAL`),
+each exact or conservative with a known false-alarm rate, each stated in
+its module: ``temperature`` (a function of temperature beyond the
+model's), ``heating_cooling``, ``power_on``, ``time`` (a drift in time),
+``step``, ``temperature_step`` (a bias discontinuity), ``spectral_line``,
+``moving_line`` (a chirp), and the noise checks ``noise_blocks``,
+``noise_correlation``, ``noise_samples``, ``noise_temperature``.
 
 All tests on all runs form one family: Holm's step-down procedure [3]_
 keeps the probability that a recording the model *does* explain is called
@@ -85,10 +35,6 @@ spread in excess of what the selected model's noise gives it.
 
 References
 ----------
-.. [1] R. A. Fisher, "Tests of significance in harmonic analysis",
-   Proc. R. Soc. Lond. A 125, 54-59 (1929).
-.. [2] M. B. Brown, A. B. Forsythe, "Robust tests for the equality of
-   variances", J. Amer. Statist. Assoc. 69, 364-367 (1974).
 .. [3] S. Holm, "A simple sequentially rejective multiple test procedure",
    Scand. J. Statist. 6, 65-70 (1979).
 """
@@ -101,9 +47,13 @@ import numpy as np
 from scipy import linalg, stats
 
 from gyrocomp.config import bind, load_config
-from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise
 from gyrocomp.diagnose import signature
-from gyrocomp.diagnose.signature import TERMS, score_test, step_scan, temperature_bins, temperature_edges
+from gyrocomp.diagnose.checks import DETERMINISTIC, KINDS, RESIDUAL, Frame, as_dict
+from gyrocomp.diagnose.checks._linear import column_scores
+from gyrocomp.diagnose.checks.noise_blocks import variance_groups, variance_segments
+from gyrocomp.diagnose.checks.spectral_line import fisher_g
+from gyrocomp.diagnose.signature import TERMS
+from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise
 
 __all__ = ["UnexplainedSettings", "get_config", "verdict", "assess", "structure_found", "Prepared", "holm", "fisher_g", "variance_segments", "variance_groups"]
 
@@ -250,135 +200,27 @@ def holm(p_values, alpha):
     return out
 
 
-def fisher_g(e, min_cycles=1):
-    """Fisher's ``g`` (largest periodogram ordinate over their sum) of `e` and its p-value [1]_.
-
-    The Fourier frequencies ``j / n``, ``min_cycles <= j < n / 2`` (slower
-    ones are drifts, not lines: the ``time`` test looks for them); the p-value is the
-    first (upper-bound) term ``m (1 - g)^(m - 1)`` of Fisher's exact series,
-    accurate in the tail where a decision is made.
-
-    Returns
-    -------
-    g : float
-    p : float
-    index : int
-        ``j`` of the largest ordinate (period ``n / j`` samples).
-
-    Examples
-    --------
-    >>> t = np.arange(256)
-    >>> g, p, j = fisher_g(np.sin(2 * np.pi * 10 * t / 256) + np.random.default_rng(0).standard_normal(256))
-    >>> j, bool(p < 1e-6)
-    (10, True)
-    """
-    e = np.asarray(e, dtype=float)
-    n = e.size
-    power = np.abs(np.fft.rfft(e - e.mean())) ** 2
-    power = power[min_cycles : (n - 1) // 2 + 1]
-    m = power.size
-    j = int(np.argmax(power))
-    g = float(power[j] / power.sum())
-    return g, float(min(1.0, m * (1.0 - g) ** (m - 1))), j + min_cycles
-
-
-def variance_segments(x, n_segments):
-    """Brown-Forsythe test [2]_ that `x` has one spread in `n_segments` consecutive segments.
-
-    Levene's test on absolute deviations from the segment medians: its
-    false-alarm rate holds for heavy tails and a few spikes, where
-    Bartlett's test of the variances calls a spike a change of noise.
-
-    Returns
-    -------
-    stat, p : float
-    std : ndarray
-        A robust standard deviation of each segment (``1.4826`` times the
-        median absolute deviation from its median).
-    """
-    x = np.asarray(x, dtype=float)
-    return variance_groups(np.array_split(x, n_segments))
-
-
-def variance_groups(groups):
-    """Brown-Forsythe test [2]_ that the arrays `groups` share one spread (see :func:`variance_segments`).
-
-    Examples
-    --------
-    >>> rng = np.random.default_rng(0)
-    >>> stat, p, std = variance_groups([rng.standard_normal(5000), 2.0 * rng.standard_normal(5000)])
-    >>> bool(p < 1e-6), bool(1.8 < std[1] / std[0] < 2.2)
-    (True, True)
-    """
-    stat, p = stats.levene(*groups, center="median")
-    return float(stat), float(p), np.array([1.4826 * np.median(np.abs(q - np.median(q))) for q in groups])
-
-
-class Prepared:
-    """One run: its innovations under the model, its structure columns and its tests."""
+class Prepared(Frame):
+    """One run: its innovations under the model, its structure columns and the registry's checks on it."""
 
     def __init__(self, label, problem, model, s: UnexplainedSettings):
-        self.label, self.problem, self.settings = label, problem, s
+        self.label, self.problem = label, problem
         y, basis, run = problem.y, problem.basis, problem.run
         self.X = problem.design_blocks(model.spec)[0]
         free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
         self.noise: NoiseModel = fit_noise(y, self.X, basis, model.noise, free)[0]
-        self.lower = linalg.cholesky(basis.covariance(self.noise), lower=True, check_finite=False)
         n = y.size
-        self.block_s = basis.block_s
         # Block centres after the first sample [s]: the true times, gaps included.
-        self.t = block_means(run.time_s, run.n_per_block)[:n] - run.time_s[0]
-        self.columns = {}
-        if run.temperature_c is not None:
-            temp = block_means(run.temperature_c, run.n_per_block)[:n]
-            self.temp = temp
-            self.columns["temperature"] = temperature_bins(temp, s.temperature_bins)
-            self.bands, self.band_c = _bands(temp, s.temperature_scan_bins, s.min_step_blocks)
-            self.threshold_c = temperature_edges(temp, s.temperature_step_bins, s.min_step_blocks)
-            rate = np.gradient(temp, self.block_s) * 60.0
-            heating, cooling = rate > s.soak_rate_c_per_min, rate < -s.soak_rate_c_per_min
-            z = (temp - temp.mean()) / max(np.ptp(temp) / 2.0, 1e-9)
-            self.regime = np.where(heating, "heating", np.where(cooling, "cooling", "soak"))
-            if heating.sum() >= 2 and cooling.sum() >= 2:
-                self.columns["heating_cooling"] = np.column_stack([heating, cooling, heating * z, cooling * z]).astype(float)
-        edges = [e for e in s.poweron_edges_s if e < self.t[-1] / 2.0]
-        end = float(self.t[-1] + 0.5 * self.block_s)
-        self.edges = {"power_on": [0.0] + edges + [end]}
-        if edges:
-            self.columns["power_on"] = _indicators(self.t, self.edges["power_on"])
-        self.edges["time"] = np.linspace(0.0, end, s.time_segments + 1).tolist()
-        self.columns["time"] = _indicators(self.t, self.edges["time"])
+        t = block_means(run.time_s, run.n_per_block)[:n] - run.time_s[0]
+        temp = block_means(run.temperature_c, run.n_per_block)[:n] if run.temperature_c is not None else None
+        lower = linalg.cholesky(basis.covariance(self.noise), lower=True, check_finite=False)
+        super().__init__(lower, t, temp, basis.block_s, s, samples=(run.rate_dps, run.n_per_block, run.fs_hz))
         self.tests = self._deterministic_tests(np.empty((n, 0)))
-        e = self._innovations(np.empty((n, 0)))[0]
-        self.tests["noise_blocks"] = _noise_test(*variance_segments(e, s.noise_segments), s)
-        self.tests["noise_correlation"] = self._correlation(e)
-        # Pairs within blocks (no block spans a gap), block after block in time.
-        x = np.asarray(run.rate_dps, dtype=float)[: n * run.n_per_block].reshape(n, run.n_per_block)
-        even = run.n_per_block - run.n_per_block % 2
-        pairs = ((x[:, 1:even:2] - x[:, 0:even:2]) / np.sqrt(2.0)).ravel()
-        stat, p, std = variance_segments(pairs, s.noise_segments)
-        self.tests["noise_samples"] = _noise_test(stat, p, std * np.sqrt(run.fs_hz), s)
-        if run.temperature_c is not None:
-            # The same pairs grouped by their block's temperature bin: a white noise that grows with temperature.
-            labels = np.repeat(np.argmax(self.columns["temperature"], axis=1), even // 2)
-            kinds = [k for k in np.unique(labels) if np.sum(labels == k) >= 2 * s.min_step_blocks]
-            if len(kinds) >= 2:
-                groups = [pairs[labels == k] for k in kinds]
-                stat, p, std = variance_groups(groups)
-                test = _noise_test(stat, p, std * np.sqrt(run.fs_hz), s)
-                cols = self.columns["temperature"][:, kinds]
-                test["temperature_c"] = [[float(self.temp[c > 0].min()), float(self.temp[c > 0].max())] for c in cols.T]
-                self.tests["noise_temperature"] = test
-        self.duration_s = end
+        e, Xw, _ = self._innovations(np.empty((n, 0)))
+        for name in RESIDUAL:
+            if name not in DETERMINISTIC and (found := KINDS[name].test(self, e, Xw)) is not None:
+                self.tests[name] = as_dict(found)
         self.kept = []
-
-    def _correlation(self, e):
-        """Ljung-Box test of the innovations `e` (white under the model)."""
-        lags = min(self.settings.whiteness_lags, e.size // 4)
-        q, p = signature.ljung_box(e, lags)
-        x = e - e.mean()
-        rho = [float(x[k:] @ x[:-k] / (x @ x)) for k in range(1, lags + 1)]
-        return {"stat": q, "p": p, "lags": lags, "rho": rho}
 
     def _whiten(self, G):
         return linalg.solve_triangular(self.lower, G, lower=True, check_finite=False)
@@ -392,74 +234,10 @@ class Prepared:
         return yw - Xw @ coef, Xw, coef
 
     def _deterministic_tests(self, extra):
-        """The score, step and spectral-line tests with the columns `extra` in the design."""
+        """The registry's checks of a deterministic structure with the columns `extra` in the design."""
         e, Xw, _ = self._innovations(extra)
-        out = {}
-        for name, G in self.columns.items():
-            stat, dof, p, *_ = score_test(e, Xw, self._whiten(G))
-            out[name] = {"stat": stat, "dof": dof, "p": p, "log10_p": _log10(stats.chi2.logsf(stat, dof)) if dof else 0.0}
-        if "temperature" in out and self.bands.shape[1]:
-            out["temperature"] = self._band_scan(e, Xw, out["temperature"])
-        step = step_scan(e, Xw, self.lower, self.settings.min_step_blocks)
-        step["log10_p"] = _log10(step.pop("log_p"))
-        step["time_s"] = step["block"] * self.block_s
-        out["step"] = step
-        if self.problem.run.temperature_c is not None and self.threshold_c.size:
-            out["temperature_step"] = self._threshold_scan(e, Xw)
-        g, p, j = fisher_g(e, self.settings.line_min_cycles)
-        m = (e.size - 1) // 2 - self.settings.line_min_cycles + 1
-        out["spectral_line"] = {
-            "stat": g,
-            "p": p,
-            "period_s": e.size * self.block_s / j,
-            "log10_p": min(0.0, _log10(np.log(m) + (m - 1) * np.log1p(-min(g, 1.0 - 1e-16)))),
-        }
-        out["moving_line"] = self._moving_line(e)
-        return out
-
-    def _band_scan(self, e, Xw, bins):
-        """The temperature test (module docstring): the bins' score `bins` and the scan of narrow bands, ``2 min`` of the two."""
-        z, live, _ = signature.column_scores(e, Xw, self.lower, self.bands)
-        j = int(np.argmax(np.abs(z)))
-        log_scan = np.log(2.0 * live.sum()) + stats.norm.logsf(abs(z[j]))
-        scan_p = float(min(1.0, np.exp(log_scan)))
-        by = "band" if scan_p < bins["p"] else "bins"
-        log_p = min(0.0, np.log(2.0) + (log_scan if by == "band" else stats.chi2.logsf(bins["stat"], bins["dof"])))
-        return bins | {
-            "p": float(min(1.0, 2.0 * min(scan_p, bins["p"]))),
-            "log10_p": _log10(log_p),
-            "by": by,
-            "band": {"stat": float(abs(z[j])), "column": j, "temperature_c": self.band_c[j], "p": scan_p},
-        }
-
-    def _threshold_scan(self, e, Xw):
-        """The temperature-step test (module docstring): the edge of largest ``|z|`` and its union-bound p."""
-        found = signature.threshold_scan(e, Xw, self.lower, self.temp, self.threshold_c)
-        return {
-            "stat": found["stat"],
-            "temperature_c": float(self.threshold_c[found["index"]]),
-            "size": found["size"],
-            "p": found["p"],
-            "log10_p": _log10(found["log_p"]),
-        }
-
-    def _moving_line(self, e):
-        """Fisher's ``g`` in each of ``line_segments`` segments of `e`; Bonferroni over them."""
-        k, cycles = self.settings.line_segments, self.settings.line_min_cycles
-        parts = np.array_split(np.arange(e.size), k)
-        if (parts[-1].size - 1) // 2 - cycles + 1 < 2:
-            # Segments too short to hold two Fourier frequencies of at least `cycles` cycles (a run in bursts).
-            return {"stat": 0.0, "p": 1.0, "p_segments": [], "segments": [], "period_s": [], "power": []}
-        found = [fisher_g(e[idx], cycles) for idx in parts]
-        p = [f[1] for f in found]
-        return {
-            "stat": float(max(f[0] for f in found)),
-            "p": float(min(1.0, k * min(p))),
-            "p_segments": p,
-            "segments": [[int(idx[0]), int(idx[-1]) + 1] for idx in parts],
-            "period_s": [idx.size * self.block_s / f[2] for idx, f in zip(parts, found)],
-            "power": [float(f[0] * e[idx] @ e[idx]) for idx, f in zip(parts, found)],
-        }
+        found = {name: KINDS[name].test(self, e, Xw) for name in DETERMINISTIC}
+        return {name: as_dict(r) for name, r in found.items() if r is not None}
 
     def explain(self, names, alpha):
         """The rejected deterministic structures that remain significant given the stronger ones.
@@ -481,10 +259,10 @@ class Prepared:
             if not kept or self._deterministic_tests(self.structure(kept))[name]["p"] < alpha:
                 kept.append(name)
         if "noise_blocks" in names:
-            e = self._innovations(self.structure(kept))[0]
-            if _noise_test(*variance_segments(e, self.settings.noise_segments), self.settings)["p"] < alpha:
+            e, Xw, _ = self._innovations(self.structure(kept))
+            if KINDS["noise_blocks"].test(self, e, Xw).pvalue < alpha:
                 kept.append("noise_blocks")
-        if "noise_correlation" in names and self._correlation(self._innovations(self.structure(kept))[0])["p"] < alpha:
+        if "noise_correlation" in names and KINDS["noise_correlation"].test(self, *self._innovations(self.structure(kept))[:2]).pvalue < alpha:
             # Still correlated with the kept structures in the design (a step alone makes the innovations correlated).
             kept.append("noise_correlation")
         kept += [k for k in ("noise_samples", "noise_temperature") if k in names]
@@ -633,7 +411,7 @@ class Prepared:
     def _strongest(self, G):
         """Index of the column of `G` whose whitened score ``|g' e| / |g|`` (orthogonal to the design) is largest."""
         e, Xw, _ = self._innovations(np.empty((self.t.size, 0)))
-        return int(np.argmax(np.abs(signature.column_scores(e, Xw, self.lower, G)[0])))
+        return int(np.argmax(np.abs(column_scores(e, Xw, self.lower, G)[0])))
 
     def size(self, baseline_residual, s: UnexplainedSettings):
         """RMS [deg/h] of the kept deterministic structures (fitted jointly) and their share of the baseline's gap."""
@@ -652,35 +430,6 @@ class Prepared:
             share = float(np.var(f100[:k], ddof=1)) / excess if excess > 0 else 1.0
             out["share_of_gap"] = float(min(1.0, max(0.0, share)))
         return out
-
-
-def _bands(temp, binnings, min_blocks):
-    """Indicators of the bins of each equal-width binning of `temp` in `binnings` holding at least `min_blocks` blocks, and their ranges [degC]."""
-    cols, ranges = [], []
-    for n_bins in binnings:
-        for col in temperature_bins(temp, n_bins).T:
-            if col.sum() >= min_blocks:
-                inside = temp[col > 0]
-                cols.append(col)
-                ranges.append([float(inside.min()), float(inside.max())])
-    return (np.column_stack(cols) if cols else np.empty((temp.size, 0))), ranges
-
-
-def _indicators(t, edges):
-    """Indicator columns of the intervals between consecutive `edges` (the last one closed)."""
-    k = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, len(edges) - 2)
-    return (k[:, None] == np.arange(len(edges) - 1)[None, :]).astype(float)
-
-
-def _log10(log_p):
-    return float(log_p / np.log(10.0))
-
-
-def _noise_test(stat, p, std, s):
-    """A noise-change test: significant and at least `noise_min_ratio` between two segments."""
-    ratio = float(std.max() / std.min()) if std.min() > 0 else np.inf
-    p_eff = p if ratio >= s.noise_min_ratio else 1.0
-    return {"stat": stat, "p": p_eff, "p_test": p, "ratio": ratio, "std": std}
 
 
 def _public(result):

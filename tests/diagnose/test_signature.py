@@ -17,6 +17,7 @@ from scipy import stats
 from gyrocomp.diagnose import DiagnoseSettings
 from gyrocomp.diagnose import confirm as cf
 from gyrocomp.diagnose import signature as sg
+from gyrocomp.diagnose.checks import spectrum
 from gyrocomp.diagnose.effects import Run, TemperatureScale
 from gyrocomp.effects.likelihood import NoiseBasis
 from gyrocomp.diagnose.select import Problem, Search, extend, fit_baseline
@@ -113,7 +114,7 @@ def test_a_step_at_one_temperature_is_refused_as_a_temperature_effect():
     assert not result.ok
     assert any("a temperature effect is absorbed" in r for r in result.reasons), result.reasons
     for run in result.stats["runs"]:
-        found = run["temperature"]
+        found = run["temperature_absorbed"]
         assert found["by"] == "step" and abs(found["step"]["temperature_c"] - 45.0) < 1.0, found
 
 
@@ -188,7 +189,7 @@ def test_tone_replication_needs_contiguous_blocks_of_one_length():
     settings = sg.SignatureSettings()
     for bases, compared in [((steady, steady), True), ((steady, gapped), False), ((steady, NoiseBasis(40, 20.0)), False)]:
         runs = [types.SimpleNamespace(basis=b) for b in bases]
-        assert (sg._spectrum(runs, e, settings) is not None) == compared
+        assert (spectrum.test(runs, e, settings) is not None) == compared
 
 
 def test_bartlett_is_calibrated_on_random_walk_increments():

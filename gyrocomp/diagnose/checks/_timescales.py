@@ -1,0 +1,53 @@
+"""The timescales a noise term explains, and the GLS residual at them: what the ``allan``, ``extreme`` and ``levels`` checks share.
+
+At every octave ``tau = m block_s`` (at least ``min_allan_windows``
+windows) where the term carries at least ``explains_share`` of the model's
+Allan variance, the checks read the GLS residual ``r = R y``, ``R = I -
+X (Xw' Xw)^-1 Xw' L^-1``, whose covariance under the model is ``R Sigma
+R'``, through the non-overlapping ``tau`` means.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import linalg
+
+__all__ = ["Timescales"]
+
+
+class Timescales:
+    """One run's GLS residual and the block multiples ``m`` at which `term` explains the model's AVAR.
+
+    Attributes
+    ----------
+    ms : ndarray of int
+        The block multiples (empty: the term explains no tested timescale).
+    block_s : float
+    r, cov_r : ndarray
+        The GLS residual and its covariance under the model (only with `ms`).
+    resid_maker : ndarray
+        ``R``.
+    lower : ndarray
+        ``L``.
+    settings
+        The signature's settings.
+    """
+
+    def __init__(self, problem, X, cov, lower, Xw, noise, term, s):
+        self.settings, self.lower, self.block_s, self.term = s, lower, problem.basis.block_s, term
+        tb, n = problem.basis.block_s, problem.y.size
+        ms = 2 ** np.arange(int(np.log2(max(n // s.min_allan_windows, 1))) + 1)
+        ms = ms[n // ms >= s.min_allan_windows]
+        self.ms = ms[noise.term_avar(term, ms * tb) >= s.explains_share * noise.avar(ms * tb)]
+        if not self.ms.size:
+            return
+        pinv = linalg.pinv(Xw)
+        self.resid_maker = np.eye(n) - X @ pinv @ linalg.solve_triangular(lower, np.eye(n), lower=True, check_finite=False)
+        self.r = self.resid_maker @ problem.y
+        self.cov_r = self.resid_maker @ cov @ self.resid_maker.T
+
+    def means(self, m):
+        """The matrix of the non-overlapping means of `m` blocks (``k x n``, the tail dropped)."""
+        n = self.r.size
+        k = n // m
+        return np.hstack([np.kron(np.eye(k), np.full((1, m), 1.0 / m)), np.zeros((k, n - k * m))])
