@@ -80,7 +80,7 @@ def test_periodic_grid_deviances_equal_the_direct_fits():
     import pandas as pd
 
     from gyrocomp.diagnose import DiagnoseSettings, problems
-    from gyrocomp.diagnose import select
+    from gyrocomp.diagnose import nonlinear, select
     from gyrocomp.recordings import recording_from_frame
 
     rng = np.random.default_rng(11)
@@ -100,9 +100,9 @@ def test_periodic_grid_deviances_equal_the_direct_fits():
     length = fit_p.y.size * fit_p.run.block_s
     periods = 1.0 / np.arange(2.0 / length, 1.0 / (4.0 * fit_p.run.block_s), 1.0 / length)  # a third of the selection's grid
     for others in ((), ((hold_p, model),)):
-        parts = [select._JointPart(fit_p, model, "periodic")] + [select._JointPart(p, m, "periodic") for p, m in others]
-        direct = [select._joint_deviance(parts, {"period_s": float(p)}, "periodic").sum() for p in periods]
-        assert_allclose(select._periodic_grid_deviances(parts, periods), direct, rtol=1e-10)
+        parts = [nonlinear._JointPart(fit_p, model, "periodic")] + [nonlinear._JointPart(p, m, "periodic") for p, m in others]
+        direct = [nonlinear._joint_deviance(parts, {"period_s": float(p)}, "periodic").sum() for p in periods]
+        assert_allclose(nonlinear._periodic_grid_deviances(parts, periods), direct, rtol=1e-10)
         assert 850.0 < periods[int(np.argmin(direct))] < 950.0
 
 

@@ -11,7 +11,7 @@ harmonics (a pulse train of duty ``d`` carries ``2 sin^2(pi k d) / (pi^2 k^2
 d (1 - d))`` of its variance in harmonic ``k``: 13 % in the fundamental at
 ``d = 0.06``). The period and ``H`` are chosen by the selection's one
 criterion on the multiharmonic periodogram (Schwarzenberg-Czerny 1996,
-:func:`gyrocomp.diagnose.select._periodic_grid_deviances`); each harmonic's
+:func:`gyrocomp.diagnose.nonlinear._periodic_grid_deviances`); each harmonic's
 sine and cosine are two more parameters, re-estimated on every run with the
 fundamental's (an interference phase is not a property of the gyro).
 

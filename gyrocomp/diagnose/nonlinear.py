@@ -1,0 +1,285 @@
+"""The nonlinear search of one effect: its nonlinear parameter and form, fitted on the fit run.
+
+:func:`extend` adds an effect to a model: a deterministic effect at the
+nonlinear parameter (a time constant, a deadband, a period) and the form of
+lowest BIC on its grid, refined in log scale (:func:`_best_nonlinear`), and
+the nonlinear parameters of the effects already in are refitted beside it
+in one coordinate-descent pass (a warm-up fitted alone stretches its time
+constant over a ramp; :func:`_descend`); ``bias_instability`` takes flicker
+or its Markov form (:func:`_bias_forms`). A periodic's period is searched
+jointly over the runs with its per-run phases (:class:`_JointPart`), its
+number of harmonics by BIC (:func:`_periodic_waveform`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy import linalg, optimize
+
+from gyrocomp.diagnose.criterion import Fitted, Problem, _n_params
+from gyrocomp.diagnose.effects import DETERMINISTIC, KINDS, PER_RUN, design, effect_columns, periodic_block_means
+from gyrocomp.effects.likelihood import NoiseModel, block_means, fit_noise, merge_blocks
+from gyrocomp.effects.vocabulary.periodic import harmonic_names
+
+__all__ = ["extend"]
+
+
+def extend(problem: Problem, current: Fitted, effect: str) -> Fitted:
+    """`current` plus `effect`, its parameters fitted on the fit run.
+
+    ``bias_instability`` takes the form of lowest BIC: flicker, or its
+    Markov form at each correlation time of its grid (one parameter more;
+    :class:`~gyrocomp.effects.likelihood.NoiseModel`).
+    """
+    stochastic = [e for e in current.order if e not in DETERMINISTIC]
+    spec = dict(current.spec)
+    starts = [current.noise]
+    if effect in DETERMINISTIC:
+        spec[effect] = _best_nonlinear(problem, current, effect)
+        # The earlier effects' nonlinear parameters were fitted without this
+        # one (a warm-up fitted alone stretches its tau over a ramp): refit
+        # each with the new effect in.
+        spec = _descend(problem, current, spec, current.spec)
+    else:
+        stochastic.append(effect)
+    Xb, names = problem.design_blocks(spec)
+    free = ("arw",) + tuple(stochastic)
+    if effect == "bias_instability":
+        starts = _bias_forms(problem, current.noise, Xb, free)
+    order = current.order + (effect,)
+    best = None
+    for start in starts:
+        noise, deviance, beta = fit_noise(problem.y, Xb, problem.basis, start, free)
+        k = current.n_params + _n_params(order, spec, noise) - _n_params(current.order, current.spec, current.noise)
+        trial = Fitted(order, spec, noise, beta, names, deviance, k, problem.bic(deviance, k))
+        if best is None or trial.bic < best.bic:
+            best = trial
+    return best
+
+
+def _bias_forms(problem: Problem, noise: NoiseModel, Xb, free) -> list:
+    """Noise models to fit ``bias_instability`` from: flicker, and its Markov form at each correlation time of the grid.
+
+    Beside a random walk every likelihood evaluation factorises the whole
+    covariance (:meth:`NoiseBasis.whitener`), so the correlation time is
+    chosen on the block means merged to ``bias_correlation_search_blocks``
+    (:func:`~gyrocomp.effects.likelihood.merge_blocks`; the Markov forms
+    have one parameter count, so their deviances rank them) and only that
+    form is fitted beside flicker on the full blocks.
+    """
+    run, s = problem.run, problem.settings
+    grid = KINDS["bias_instability"].grid(s, run.n_blocks * run.block_s, run.block_s)
+    markov = [dataclasses.replace(noise, bias_correlation_s=float(tc)) for tc in grid]
+    flicker = dataclasses.replace(noise, bias_correlation_s=0.0)
+    if not noise.rate_random_walk or not markov or problem.y.size <= s.bias_correlation_search_blocks:
+        return [flicker] + markov
+    y, X, basis = merge_blocks(problem.y, Xb, problem.basis, s.bias_correlation_search_blocks)
+    deviance = [fit_noise(y, X, basis, start, free)[1] for start in markov]
+    return [flicker, markov[int(np.argmin(deviance))]]
+
+
+def _descend(problem: Problem, model: Fitted, spec: dict, effects) -> dict:
+    """One coordinate-descent pass: `spec` with each of `effects` that has a nonlinear parameter or forms
+    refitted in turn (:func:`_best_nonlinear`) at `model`'s noise, beside the others' parameters as they stand."""
+    spec = dict(spec)
+    for effect in effects:
+        if KINDS[effect].nonlinear or KINDS[effect].forms:
+            spec[effect] = _best_nonlinear(problem, dataclasses.replace(model, spec=spec), effect)
+    return spec
+
+
+def _best_nonlinear(problem: Problem, current: Fitted, effect: str, others_problems=()) -> dict:
+    """Grid search (then bounded refinement in log scale) of the effect's nonlinear parameter, in its best form.
+
+    An effect with :attr:`~gyrocomp.effects.vocabulary.Effect.forms` takes the
+    form of lowest BIC, ``-2 log L + k ln n`` with ``k`` the form's
+    parameter count and ``n`` the blocks of the runs, each form at its own
+    best nonlinear parameter: a richer form's extra columns earn their
+    place like an effect's (a temperature-rate asymmetry that is not there
+    must not charge a symmetric sensitivity a parameter its look-alike, a
+    short thermal lag, does not pay), and between forms with as many
+    parameters the likelihood decides (a hysteresis relay or play).
+
+    Every parameter is refined between the grid's neighbours of the best
+    point, the hysteresis deadband too: a relay's switching width is
+    anything from half a degree to 15 degC, and a width between two grid
+    points moves every switch by tens of seconds on a 1 degC/min ramp,
+    which a strong hysteresis shows (and a noise term would absorb).
+
+    The noise is held at the current model's; the other columns are
+    block-averaged once. With `others_problems` (``(problem, model)`` pairs:
+    the holdout with its own noise, in the joint criterion of
+    :func:`joint_gain`) the deviance is summed over the runs, the per-run
+    columns separate and the rest shared.
+    """
+    kind = KINDS[effect]
+    if not kind.nonlinear and not kind.forms:
+        return {}
+    parts = [_JointPart(problem, current, effect)] + [_JointPart(p, m, effect) for p, m in others_problems]
+    log_n = np.log(sum(part.y_w.size for part in parts))
+    fitted = [_best_in_form(problem, parts, effect, dict(form)) for form in kind.forms or ({},)]
+    bic = [value + kind.n_params_of(params) * log_n for params, value in fitted]
+    return fitted[int(np.argmin(bic))][0]
+
+
+def _best_in_form(problem: Problem, parts, effect: str, form: dict):
+    """The nonlinear parameter of `effect` in one of its forms (:func:`_best_nonlinear`): ``(params, -2 log L)``."""
+    kind = KINDS[effect]
+    key = kind.nonlinear
+
+    def deviance(params):
+        return float(_joint_deviance(parts, params, effect).sum())
+
+    if not key or key in form:
+        return form, deviance(form)
+    run = problem.run
+    length_s = run.n_blocks * run.block_s
+    grid = kind.grid(problem.settings, length_s, run.block_s)
+    if effect == "periodic":
+        return _periodic_waveform(parts, grid, problem.settings, length_s, run.block_s, lambda p: deviance(form | p))
+    values = np.array([deviance(form | {key: float(v)}) for v in grid])
+    value, best = _refine(grid, values, lambda v: deviance(form | {key: v}))
+    return form | {key: value}, best
+
+
+def _refine(grid, values, deviance):
+    """The grid point of least deviance refined (bounded, in log scale) between its neighbours: ``(value, deviance)``."""
+    i = int(np.argmin(values))
+    a, b = sorted((np.log(grid[max(i - 1, 0)]), np.log(grid[min(i + 1, grid.size - 1)])))
+    if b > a:
+        best = optimize.minimize_scalar(
+            lambda z: deviance(float(np.exp(z))), bounds=(a, b), method="bounded", options={"xatol": 1e-3}
+        )
+        if best.fun < values[i]:
+            return float(np.exp(best.x)), float(best.fun)
+    return float(grid[i]), float(values[i])
+
+
+def _periodic_waveform(parts, periods, settings, length_s, block_s, deviance):
+    """The multiharmonic periodogram: the period and the number of harmonics ``H`` of least BIC.
+
+    For every ``H`` from 1 to ``periodic_harmonics`` the deviance of a
+    Fourier series of ``H`` harmonics is scanned over the periods that may
+    carry ``H`` (:meth:`gyrocomp.effects.vocabulary.periodic._Periodic.max_harmonics`)
+    and its best period refined (harmonic ``k`` moves ``k`` times faster
+    with the period than the fundamental, so each ``H`` is refined apart);
+    the ``H`` of least ``deviance + 2 H R ln n`` wins (``2 H`` per-run
+    coefficients on each of the ``R`` runs, ``n`` their blocks: the
+    selection's parameter count). The harmonics summed, a pulse train's
+    fundamental scores its whole power, not the fundamental's share
+    (Schwarzenberg-Czerny 1996).
+
+    Returns
+    -------
+    params : dict
+        ``{"period_s": P, "harmonics": H}``.
+    deviance : float
+        Its ``-2 log L``.
+    """
+    effect = KINDS["periodic"]
+    h_max = np.array([effect.max_harmonics(settings, p, length_s, block_s) for p in periods])
+    log_n = np.log(sum(part.y_w.size for part in parts))
+    best_score, best = np.inf, None
+    for h in range(1, int(h_max.max()) + 1):
+        ok = h_max >= h
+        values = np.full(len(periods), np.inf)
+        values[ok] = _periodic_grid_deviances(parts, periods[ok], h)
+        period, dev = _refine(periods, values, lambda p: deviance({"period_s": p, "harmonics": h}))
+        score = dev + 2 * h * len(parts) * log_n
+        if score < best_score:
+            best_score, best = score, ({"period_s": period, "harmonics": h}, dev)
+    return best
+
+
+class _JointPart:
+    """One run's whitened block means and fixed columns for a candidate `effect`."""
+
+    def __init__(self, problem: Problem, current: Fitted, effect: str):
+        run = problem.run
+        self.problem = problem
+        self.whitener = problem.basis.whitener(current.noise)
+        others = {k: v for k, v in current.spec.items() if k != effect}
+        X, names = design(run, others, problem.poly_degree, problem.scale)
+        if effect == "thermal_lag":
+            keep = [i for i, n in enumerate(names) if not n.startswith("temperature^")]
+            X, names = X[:, keep], [names[i] for i in keep]
+        # Whitening is linear: whiten the fixed columns and y once, then only the candidate's.
+        self.base_w = self.whitener.whiten(block_means(X, run.n_per_block))
+        self.base_names = names
+        self.y_w = self.whitener.whiten(problem.y)
+        self.constant = self.whitener.logdet + problem.y.size * np.log(2.0 * np.pi)
+
+    def candidate(self, effect, params):
+        run, p = self.problem.run, self.problem
+        if effect is None:
+            return np.empty((self.y_w.size, 0)), []
+        if effect == "periodic":
+            harmonics = int(params.get("harmonics", 1))
+            return self.whitener.whiten(periodic_block_means(run, params["period_s"], harmonics)), harmonic_names(harmonics)
+        full, names = effect_columns(run, effect, params, p.poly_degree, p.scale)
+        return self.whitener.whiten(block_means(full, run.n_per_block)), names
+
+
+def _periodic_grid_deviances(parts, periods, harmonics=1):
+    """:func:`_joint_deviance` of ``periodic`` of `harmonics` harmonics at every period of a grid, in a few matrix products.
+
+    The base columns do not change along the grid: with ``U`` an orthonormal
+    basis of the (stacked, whitened) base design, ``y_perp = y - U U' y``
+    and the sin/cos columns ``C`` of one period (per run), the deviance is
+    ``constant + |y_perp|^2 - b' A^+ b`` with ``b = C' y_perp`` and
+    ``A = C'C - (U'C)'(U'C)``; all periods' ``C`` are whitened at once.
+    """
+    c = 2 * int(harmonics)
+    free = [np.array([n in PER_RUN for n in part.base_names]) for part in parts]
+    shared = np.vstack([part.base_w[:, ~f] for part, f in zip(parts, free)])
+    per_run = linalg.block_diag(*[part.base_w[:, f] for part, f in zip(parts, free)])
+    u, sv, _ = linalg.svd(np.hstack([shared, per_run]), full_matrices=False, check_finite=False)
+    u = u[:, sv > sv[0] * 1e-12]
+    y = np.concatenate([part.y_w for part in parts])
+    y_perp = y - u @ (u.T @ y)
+    n_g = len(periods)
+    gram = np.zeros((n_g, c * len(parts), c * len(parts)))
+    b = np.zeros((n_g, c * len(parts)))
+    ucs = np.zeros((n_g, u.shape[1], c * len(parts)))
+    row = 0
+    for j, part in enumerate(parts):
+        k = part.y_w.size
+        cols = np.hstack([periodic_block_means(part.problem.run, p, harmonics) for p in periods])  # (k, c G)
+        cw = part.whitener.whiten(cols).reshape(k, n_g, c).transpose(1, 0, 2)  # (G, k, c)
+        gram[:, c * j : c * j + c, c * j : c * j + c] = np.einsum("gki,gkj->gij", cw, cw)
+        b[:, c * j : c * j + c] = np.einsum("gki,k->gi", cw, y_perp[row : row + k])
+        ucs[:, :, c * j : c * j + c] = np.einsum("kp,gki->gpi", u[row : row + k], cw)
+        row += k
+    a = gram - np.einsum("gpi,gpj->gij", ucs, ucs)
+    explained = np.einsum("gi,gij,gj->g", b, np.linalg.pinv(a, rcond=1e-12, hermitian=True), b)
+    constant = sum(part.constant for part in parts)
+    return constant + float(y_perp @ y_perp) - explained
+
+
+def _joint_deviance(parts, params, effect):
+    """``-2 log L`` of each run: shared coefficients, per-run :data:`PER_RUN` columns.
+
+    Returns an array, one deviance per run (their sum is the joint one).
+    """
+    blocks, ys, constants = [], [], []
+    for part in parts:
+        cols, names = part.candidate(effect, params)
+        X = np.hstack([part.base_w, cols])
+        names = part.base_names + names
+        blocks.append((X, np.array([n in PER_RUN for n in names])))
+        ys.append(part.y_w)
+        constants.append(part.constant)
+    if len(parts) == 1:
+        X = blocks[0][0]
+    else:
+        free = blocks[0][1]
+        shared = np.vstack([X[:, ~free] for X, _ in blocks])
+        per_run = linalg.block_diag(*[X[:, free] for X, _ in blocks])
+        X = np.hstack([shared, per_run])
+    y = np.concatenate(ys)
+    beta, *_ = linalg.lstsq(X, y, cond=1e-12, lapack_driver="gelsy", check_finite=False)
+    r = y - X @ beta
+    ends = np.cumsum([part.y_w.size for part in parts])[:-1]
+    return np.array([c + float(rk @ rk) for c, rk in zip(constants, np.split(r, ends))])
