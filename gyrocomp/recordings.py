@@ -97,6 +97,9 @@ PLAUSIBLE_DEGC = (-100.0, 200.0)
 _CHECK_ROWS = 1 << 16
 """Samples a per-sample check looks at at a time, so that its temporaries stay this small whatever the recording's length."""
 
+_MEDIAN_ROWS = 1 << 20
+"""Intervals the median interval is taken of in one array (8 MiB); a longer time axis is selected a chunk at a time."""
+
 
 def _entries(value: str | Sequence[str]) -> tuple[str, ...]:
     """The comma-separated entries of an option (or the items of a sequence), stripped."""
@@ -1181,9 +1184,67 @@ def _check_order(out: dict, spec: ColumnSpec, locate) -> tuple[dict, np.ndarray 
 
 
 def _nominal_interval(time: np.ndarray) -> float:
+    """The median sampling interval [s], ``np.median(np.diff(time))``.
+
+    A time axis longer than :data:`_MEDIAN_ROWS` samples never holds its
+    intervals at once (:func:`_interval_rank`): the array of intervals
+    would add 8 bytes a sample to a reading's peak.
+    """
     if time.size < 2:
         return 1.0
-    return _median_inplace(np.diff(time))
+    n = len(time) - 1
+    if n <= _MEDIAN_ROWS:
+        return _median_inplace(np.diff(time))
+    k = n // 2
+    if n % 2:
+        return float(_interval_rank(time, k)[0])
+    low, at_most_low = _interval_rank(time, k - 1)
+    high = low if at_most_low > k else _interval_rank(time, k)[0]
+    return float((low + high) / 2.0)
+
+
+def _interval_rank(time: np.ndarray, k: int) -> tuple[np.float64, int]:
+    """The `k`-th smallest (0-based) of the intervals ``np.diff(time)``, and how many intervals are at most it.
+
+    Selection by pivots, each pass over the intervals :data:`_CHECK_ROWS`
+    at a time: the pivot is a quantile of a strided sample of the
+    intervals still in play, so a regular time axis (a few distinct
+    intervals) takes one pass; once no more than :data:`_MEDIAN_ROWS`
+    remain in play they are gathered and partitioned. Exact: the value
+    is one of the intervals, the same as ``np.partition(np.diff(time), k)[k]``.
+    """
+    n = len(time) - 1
+    lo, hi, below, left = -np.inf, np.inf, 0, n  # the k-th lies in (lo, hi); `below` intervals are <= lo, `left` in (lo, hi)
+    stride = max(1, n // _CHECK_ROWS)
+    while True:
+        if left <= _MEDIAN_ROWS:
+            inside = np.concatenate(list(_intervals_between(time, lo, hi)))
+            value = np.partition(inside, k - below)[k - below]
+            return value, below + int(np.count_nonzero(inside <= value))
+        start = time[:-1:stride]
+        sample = time[1::stride][: len(start)] - start
+        sample = sample[(sample > lo) & (sample < hi)]
+        if not sample.size:  # the sample missed every interval in play: take the first chunk holding one
+            sample = next(d for d in _intervals_between(time, lo, hi) if d.size)
+        q = min(int((k - below) / left * sample.size), sample.size - 1)
+        pivot = np.partition(sample, q)[q]
+        less = equal = 0
+        for d in _intervals_between(time, lo, hi):
+            less += int(np.count_nonzero(d < pivot))
+            equal += int(np.count_nonzero(d == pivot))
+        if below + less <= k < below + less + equal:
+            return pivot, below + less + equal
+        if k < below + less:
+            hi, left = pivot, less
+        else:
+            lo, below, left = pivot, below + less + equal, left - less - equal
+
+
+def _intervals_between(time: np.ndarray, lo: float, hi: float) -> Iterator[np.ndarray]:
+    """The intervals ``np.diff(time)`` strictly between `lo` and `hi`, :data:`_CHECK_ROWS` intervals at a time."""
+    for start in range(0, len(time) - 1, _CHECK_ROWS):
+        d = np.diff(time[start : start + _CHECK_ROWS + 1])
+        yield d[(d > lo) & (d < hi)]
 
 
 def _check_time_base(time: np.ndarray, nominal: float, src: str, name: str, limits: TimeLimits) -> None:

@@ -333,3 +333,24 @@ def test_gaps_and_duplicates_across_chunks_are_counted_whole():
     with pytest.warns(recordings.RecordingNote, match="3 segments: 2 gaps, the longest 2.501 s"):
         rec = recordings.recording_from_frame({"time": gapped, "rate": np.zeros(n)}, name="long", allow_gaps=True)
     assert [(s.start, s.stop) for s in rec.segments] == [(0, 65_536), (65_536, 150_000), (150_000, n)]
+
+
+@pytest.mark.parametrize("n", [40_001, 40_002])
+def test_median_interval_of_a_long_axis_is_numpys_without_the_intervals(monkeypatch, n):
+    """The chunked selection gives ``np.median(np.diff(time))`` bit for bit: regular, random, gapped and two-valued axes."""
+    monkeypatch.setattr(recordings, "_MEDIAN_ROWS", 1000)  # select a chunk at a time from 1000 intervals on
+    monkeypatch.setattr(recordings, "_CHECK_ROWS", 4096)
+    rng = np.random.default_rng(38)
+    gapped = np.arange(n) / 100.0
+    gapped[n // 2 :] += 5.0
+    axes = {
+        "regular": np.arange(n) / 1000.0,
+        "random": np.cumsum(rng.uniform(0.5, 1.5, n)),
+        "gapped": gapped,
+        "rounding": np.cumsum(rng.choice([0.001, 0.0010000001, 0.002], n, p=[0.49, 0.02, 0.49])),
+        "halves": np.cumsum(np.r_[np.full(n // 2, 0.001), np.full(n - n // 2, 0.002)]),
+        "lognormal": np.cumsum(rng.lognormal(0.0, 2.0, n)),
+    }
+    for name, time in axes.items():
+        expected = np.median(np.diff(time))
+        assert recordings._nominal_interval(time) == expected, name
