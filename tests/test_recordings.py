@@ -12,7 +12,7 @@ import pytest
 
 from gyrocomp import artefacts, compressed, recordings
 from gyrocomp.errors import InputError
-from gyrocomp.recordings import ColumnSpec, read_recording
+from gyrocomp.recordings import ColumnSpec, read_recording, timebase
 
 REPO = Path(__file__).resolve().parents[1]
 REAL_DATA = Path(os.environ.get("GYROCOMP_REAL_DATA", REPO.parent / "shared" / "real-data"))  # as tests/conftest.py
@@ -338,8 +338,8 @@ def test_gaps_and_duplicates_across_chunks_are_counted_whole():
 @pytest.mark.parametrize("n", [40_001, 40_002])
 def test_median_interval_of_a_long_axis_is_numpys_without_the_intervals(monkeypatch, n):
     """The chunked selection gives ``np.median(np.diff(time))`` bit for bit: regular, random, gapped and two-valued axes."""
-    monkeypatch.setattr(recordings, "_MEDIAN_ROWS", 1000)  # select a chunk at a time from 1000 intervals on
-    monkeypatch.setattr(recordings, "_CHECK_ROWS", 4096)
+    monkeypatch.setattr(timebase, "_MEDIAN_ROWS", 1000)  # select a chunk at a time from 1000 intervals on
+    monkeypatch.setattr(timebase, "_CHECK_ROWS", 4096)
     rng = np.random.default_rng(38)
     gapped = np.arange(n) / 100.0
     gapped[n // 2 :] += 5.0
