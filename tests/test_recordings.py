@@ -353,4 +353,4 @@ def test_median_interval_of_a_long_axis_is_numpys_without_the_intervals(monkeypa
     }
     for name, time in axes.items():
         expected = np.median(np.diff(time))
-        assert recordings._nominal_interval(time) == expected, name
+        assert recordings.median_interval(time) == expected, name

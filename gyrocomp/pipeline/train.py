@@ -38,7 +38,7 @@ from gyrocomp import recordings
 from gyrocomp.config import bind, settings_dict
 from gyrocomp.errors import InputError
 from gyrocomp.pipeline import rate as rate_estimator
-from gyrocomp.pipeline.block_fit import TRAIN_ROWS, fit_block_means
+from gyrocomp.pipeline.block_fit import fit_block_means
 from gyrocomp.pipeline.signal_path import class_sums, segments
 from gyrocomp.pipeline.settings import model_settings, pipeline_settings
 
@@ -387,36 +387,7 @@ def _temperature_of(frame, name: str) -> np.ndarray:
 
 
 def _fs_of(time_s: np.ndarray) -> float:
-    """1 / the median interval of the time stamps, as ``np.median(np.diff(time_s))``, in memory of `TRAIN_ROWS` intervals."""
+    """1 / the median interval of the time stamps, as ``np.median(np.diff(time_s))``, without the array of intervals (:func:`gyrocomp.recordings.median_interval`)."""
     if time_s.size < 2:
         raise InputError("components: fewer than 2 samples")
-    m = time_s.size - 1
-    middle = [_kth_interval(time_s, k) for k in sorted({(m - 1) // 2, m // 2})]
-    if any(value is None for value in middle):  # intervals not all positive: not a time base this selection orders
-        return 1.0 / float(np.median(np.diff(time_s)))
-    return 1.0 / float(np.mean(middle))
-
-
-def _kth_interval(time_s: np.ndarray, k: int):
-    """The `k`-th smallest (from 0) of ``np.diff(time_s)``, or None when an interval is not positive.
-
-    A radix selection on the bits of the intervals, 16 at a time: a positive
-    float's bits, read as an unsigned integer, sort as its value. Four
-    passes over the time stamps, `TRAIN_ROWS` at a time, give the exact value.
-    """
-    prefix = 0
-    for shift in (48, 32, 16, 0):
-        counts = np.zeros(1 << 16, np.int64)
-        for lo in range(0, time_s.size - 1, TRAIN_ROWS):
-            step = np.diff(time_s[lo : lo + TRAIN_ROWS + 1])
-            if shift == 48 and not np.all(step > 0):
-                return None
-            bits = step.view(np.uint64)
-            if shift < 48:
-                bits = bits[(bits >> np.uint64(shift + 16)) == np.uint64(prefix)]
-            counts += np.bincount(((bits >> np.uint64(shift)) & np.uint64(0xFFFF)).astype(np.int64), minlength=1 << 16)
-        below = np.cumsum(counts)
-        digit = int(np.searchsorted(below, k, side="right"))
-        k -= int(below[digit - 1]) if digit else 0
-        prefix = (prefix << 16) | digit
-    return float(np.array([prefix], np.uint64).view(np.float64)[0])
+    return 1.0 / recordings.median_interval(time_s)

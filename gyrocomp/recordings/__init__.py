@@ -67,7 +67,7 @@ from gyrocomp.recordings.spec import (
     check_training_range,
     length_limits,
 )
-from gyrocomp.recordings.timebase import _nominal_interval, check_segment_lengths, gap_note
+from gyrocomp.recordings.timebase import check_segment_lengths, gap_note, median_interval
 
 __all__ = [
     "ColumnSpec",

@@ -21,7 +21,7 @@ from gyrocomp.columns import matching_columns
 from gyrocomp.errors import InputError, RecordingNote
 from gyrocomp.recordings.recording import Recording
 from gyrocomp.recordings.spec import ACCELERATION_UNITS, PLAUSIBLE_DEGC, RATE_UNITS, TIME_UNITS, AxisLimits, Channel, ColumnSpec, TimeLimits
-from gyrocomp.recordings.timebase import _CHECK_ROWS, _check_order, _check_time_base, _nominal_interval, _segments
+from gyrocomp.recordings.timebase import _CHECK_ROWS, _check_order, _check_time_base, _segments, median_interval
 
 if TYPE_CHECKING:  # pandas is imported where a function needs it: the Parquet path of a recording never does
     import pandas as pd
@@ -113,7 +113,7 @@ def recording_from_frame(
     n = len(out["time"])
     if n < min_samples:
         raise InputError(f"{name}: {n} samples once duplicates are merged, this command needs at least {min_samples}")
-    nominal = _nominal_interval(out["time"]) if _interval is None else _interval
+    nominal = median_interval(out["time"]) if _interval is None else _interval
     if columns.time_unit is None and origin is None and _interval is None:  # numbers read as seconds, not datetimes
         _check_time_base(out["time"], nominal, columns.time, name, limits)
     out, segments, filled = _segments(out, nominal, columns.time, locate, jitter_tolerance, resample, allow_gaps, _open_ends, _first_segment)

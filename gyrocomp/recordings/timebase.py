@@ -62,8 +62,8 @@ def _check_order(out: dict, spec: ColumnSpec, locate) -> tuple[dict, np.ndarray 
     return merged, starts, [note]
 
 
-def _nominal_interval(time: np.ndarray) -> float:
-    """The median sampling interval [s], ``np.median(np.diff(time))``.
+def median_interval(time: np.ndarray) -> float:
+    """The median sampling interval [s], ``np.median(np.diff(time))`` (1 for fewer than 2 stamps).
 
     A time axis longer than :data:`_MEDIAN_ROWS` samples never holds its
     intervals at once (:func:`_interval_rank`): the array of intervals

@@ -67,7 +67,7 @@ def test_training_memory_does_not_grow_with_the_record(monkeypatch):
 
 
 def test_sample_rate_and_causal_range_in_runs_equal_the_whole_arrays():
-    """`_fs_of` (a radix selection of the median interval) and `_causal_rate_range` (streamed) bit for bit."""
+    """`_fs_of` (the median interval, selected without the array of intervals) and `_causal_rate_range` (streamed) bit for bit."""
     from gyrocomp.pipeline.block_fit import TRAIN_ROWS, _causal_rate_range
     from gyrocomp.pipeline.train import _fs_of, segment_inputs
 
