@@ -7,10 +7,12 @@ writes allan.json. The two commands alternate `REPEATS` times (5: other agents s
 are the ratios of median wall times, of median CPU times (user + system of
 the child, less sensitive to other load) and of peak resident memory
 (``/usr/bin/time -v``). Timings are noisy while other jobs share the CPU.
+gyrocomp's modules are byte-compiled first, as those of an installed copy are.
 """
 
 from __future__ import annotations
 
+import os
 import resource
 import statistics
 import subprocess
@@ -72,6 +74,11 @@ def peak_rss(cmd: list[str]) -> float:
 
 def main() -> int:
     make_data()
+    load_at_start = os.getloadavg()
+    # gyrocomp as pip installs it, its modules byte-compiled: a checkout run with PYTHONDONTWRITEBYTECODE
+    # compiles every module it imports from source in every run, which no installed copy does (allantools'
+    # modules are compiled in site-packages)
+    subprocess.run([sys.executable, "-m", "compileall", "-q", str(HERE.parent / "gyrocomp")], check=True)
     out = HERE / "_data" / "allan_bench.json"
     ours = [sys.executable, "-m", "gyrocomp", "--quiet", "allan", str(DATA), "--out", str(out)]
     theirs = [sys.executable, "-c", ALLANTOOLS_SCRIPT, str(DATA)]
@@ -86,6 +93,7 @@ def main() -> int:
     mem_ours, mem_theirs = peak_rss(ours), peak_rss(theirs)
     figures = {
         "n_samples": N_SAMPLES,
+        "load_average_at_start": [round(x, 2) for x in load_at_start],
         "repeats": REPEATS,
         "gyrocomp_s": statistics.median(t_ours),
         "allantools_s": statistics.median(t_theirs),

@@ -78,7 +78,8 @@ def allan(
     with report_errors(ctx):
         options = from_params(stage.Options, ctx.params)
         series = stage.to_files(recordings, out, options)
-        console.print(_table(series))
+        if not console.quiet:  # the table is only built to be printed
+            console.print(_table(series))
         stage.check(series, options)
 
 
