@@ -32,6 +32,7 @@ fitted on the fit recording only.
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -116,6 +117,12 @@ class Run:
     def n_blocks(self) -> int:
         return self.rate_dps.size // self.n_per_block
 
+    @functools.cached_property
+    def block_centre_s(self) -> np.ndarray:
+        """Mean time of each block's samples [s] (computed once: a period grid asks for it at every period)."""
+        m = self.n_per_block
+        return self.time_s[: self.n_blocks * m].reshape(self.n_blocks, m).mean(axis=1)
+
 
 @dataclasses.dataclass(frozen=True)
 class TemperatureScale:
@@ -176,7 +183,7 @@ def periodic_block_means(run: Run, period_s, harmonics: int = 1):
     """
     m = run.n_per_block
     h = 1.0 / run.fs_hz
-    centre = run.time_s[: run.n_blocks * m].reshape(run.n_blocks, m).mean(axis=1)
+    centre = run.block_centre_s
     cols = []
     for k in range(1, int(harmonics) + 1):
         w = 2.0 * np.pi * k / period_s

@@ -61,6 +61,25 @@ def test_whitener_paths_agree_with_scipy():
         assert_allclose(dev, ref, rtol=1e-9)
 
 
+@pytest.mark.parametrize("starts", [None, np.cumsum(np.r_[0.0, np.full(39, 20.0), 300.0, np.full(19, 20.0)])])
+def test_covariance_is_the_sum_of_its_terms_to_the_bit(starts):
+    """Sigma summed in place equals N^2 C_w + B^2 C_f + K^2 C_k added matrix by matrix, in every form, bit for bit."""
+    basis = NoiseBasis(60, 20.0, starts)
+    for noise in (
+        NoiseModel(arw=0.03),
+        NoiseModel(arw=0.03, bias_instability=0.002),
+        NoiseModel(arw=0.03, bias_instability=0.002, bias_correlation_s=300.0),
+        NoiseModel(arw=0.03, rate_random_walk=1e-4),
+        NoiseModel(arw=0.03, bias_instability=0.002, rate_random_walk=1e-4),
+    ):
+        expected = noise.arw**2 * basis.white
+        if noise.bias_instability:
+            expected = expected + noise.bias_instability**2 * basis.bias(noise.bias_correlation_s)
+        if noise.rate_random_walk:
+            expected = expected + noise.rate_random_walk**2 * basis.random_walk
+        np.testing.assert_array_equal(basis.covariance(noise), expected)
+
+
 @pytest.mark.parametrize("b_deg_h", [20.0])
 def test_fit_noise_recovers_bias_instability(b_deg_h):
     """ML on block means of simulated white + flicker noise recovers B within 25 %."""
