@@ -59,12 +59,13 @@ import provenance  # noqa: E402
 from gyrocomp.diagnose import problems  # noqa: E402
 from gyrocomp.effects.likelihood import fit_noise, merge_blocks  # noqa: E402
 from gyrocomp.diagnose.select import extend, fit_baseline  # noqa: E402
-from gyrocomp.diagnose.signature import TERMS, SignatureSettings, check, column_scores, innovations  # noqa: E402
+from gyrocomp.diagnose.settings import ChecksSettings  # noqa: E402
+from gyrocomp.diagnose.signature import TERMS, check, column_scores, innovations  # noqa: E402
 from gyrocomp.recordings import Recording  # noqa: E402
 
 KINDS = {"bias_step/mode_hop": "step", "transient/gaussian_bump": "bump", "telegraph_noise/popcorn": "levels"}
 """The generator's kinds measured here, and the event each is tested as."""
-MIN_BLOCKS = SignatureSettings().min_step_blocks
+MIN_BLOCKS = ChecksSettings().min_step_blocks
 """An event spans at least this many merged blocks (the signature's, as its step scan)."""
 
 
@@ -107,7 +108,7 @@ def gain_beside_event(y, X, basis, noise, term, G):
 def event_test(problem, model, term, event, draws, seed):
     """The run's gain of `term` beside its best single event, and the share of draws of the fitted model at or below it."""
     X = problem.design_blocks(model.spec)[0]
-    y, Xm, basis = merge_blocks(problem.y, X, problem.basis, SignatureSettings().max_blocks)
+    y, Xm, basis = merge_blocks(problem.y, X, problem.basis, ChecksSettings().agreement_max_blocks)
     free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
     noise = fit_noise(y, Xm, basis, model.noise, free)[0]
     G = step_columns(y.size) if event == "step" else bump_columns(y.size)

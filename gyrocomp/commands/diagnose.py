@@ -79,12 +79,11 @@ def to_files(
     from gyrocomp import artefacts, recordings
     from gyrocomp import plots
     from gyrocomp.config import settings_dict
-    from gyrocomp.diagnose import diagnose, get_config, unexplained
+    from gyrocomp.diagnose import diagnose, get_config
     from gyrocomp.diagnose.report import to_json, to_markdown
 
     (fit,) = inputs
     settings = get_config(options.config)
-    unexplained_settings = unexplained.get_config()
 
     def read(path):
         # A recording with gaps is diagnosed by segments (gyrocomp.diagnose.problems), never interpolated.
@@ -108,7 +107,7 @@ def to_files(
     for axis in fit_rec.axis_names:
         held = [rec.axis(axis if len(fit_rec.axes) > 1 else None) for rec in hold_recs]
         bodies[axis] = diagnose(
-            fit_rec.axis(axis), held, settings, start_effects=start, callback=progress, unexplained_settings=unexplained_settings
+            fit_rec.axis(axis), held, settings, start_effects=start, callback=progress
         )
     if options.model_out is not None:
         models, units, left_out = {}, {}, {}
@@ -122,7 +121,7 @@ def to_files(
         for axis, body in bodies.items():
             body["model_out"] = {"path": str(options.model_out), **left_out[axis]}
     records = [rec.input_record() for rec in [fit_rec] + hold_recs]
-    report = to_json({}, inputs=records, settings={**settings_dict(settings), "unexplained": settings_dict(unexplained_settings)})
+    report = to_json({}, inputs=records, settings=settings_dict(settings))
     verdicts = {axis: {**report, **to_json(body, inputs=records, settings=report["settings"]), "axis": axis} for axis, body in bodies.items()}
     if len(verdicts) == 1:
         report = next(iter(verdicts.values()))

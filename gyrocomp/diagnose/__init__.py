@@ -60,85 +60,22 @@ import os
 
 import numpy as np
 
-from gyrocomp.config import bind, check_tables, load_config, settings_dict
+from gyrocomp.config import settings_dict
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
 from gyrocomp.diagnose import confirm as _confirm
 from gyrocomp.diagnose import signature as _signature
-from gyrocomp.diagnose import unexplained as _unexplained
 from gyrocomp.diagnose.detectability import detection_limit
 from gyrocomp.diagnose.error_rate import error_rate
 from gyrocomp.diagnose.identify import unidentifiable
 from gyrocomp.diagnose.effects import EFFECTS, NEEDS_TEMPERATURE, Run, TemperatureScale, effect_params
 from gyrocomp.diagnose.select import Fitted, Problem, Search, extend, fit_baseline, holdout_fit, residual_of, sample_arw
+from gyrocomp.diagnose.settings import DiagnoseSettings, get_config
 from gyrocomp.errors import InputError
 
 __all__ = ["DiagnoseSettings", "get_config", "diagnose", "problems", "reduce_recording", "SCHEMA", "EFFECTS"]
 
 SCHEMA = "gyrocomp.diagnosis"
-
-
-@dataclasses.dataclass(frozen=True)
-class DiagnoseSettings:
-    """The ``[diagnose]`` table; defaults equal ``configs/diagnose.toml`` (reasons there)."""
-
-    poly_degree: int = 3
-    block_s: float = 10.0
-    max_blocks: int = 720
-    max_rate_hz: float = 1.0
-    bic_margin: float = 10.0
-    detection_power: float = 0.95
-    max_effects: int = 8
-    min_temperature_span_c: float = 2.0
-    identifiable_min_unique: float = 0.01
-    temp_rate_smooth_s: float = 60.0
-    thermal_lag_tau_s: tuple = (2.0, 28800.0)
-    warmup_tau_s: tuple = (60.0, 14400.0)
-    rate_ramp_power: tuple = (0.25, 4.0)
-    tau_grid_points: int = 24
-    bias_correlation_s: tuple = (20.0, 7200.0)
-    bias_correlation_points: int = 9
-    bias_correlation_max_fraction: float = 4.0
-    bias_correlation_search_blocks: int = 240
-    hysteresis_deadband_c: tuple = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
-    periodic_min_blocks: float = 4.0
-    periodic_oversample: float = 3.0
-    periodic_harmonics: int = 8
-    periodic_harmonic_min_cycles: float = 4.0
-    periodic_harmonic_min_blocks: float = 2.0
-    gap_block_s: float = 100.0
-    gap_min_windows: int = 16
-    smooth_s: float = 100.0
-    warmup_window_s: float = 1800.0
-    soak_rate_c_per_min: float = 0.05
-    temperature_bin_c: float = 20.0
-    emd_max_imfs: int = 8
-    emd_max_sift: int = 50
-
-    def __post_init__(self):
-        for name in ("block_s", "max_rate_hz", "bias_correlation_max_fraction", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks",
-                     "periodic_harmonic_min_cycles", "periodic_harmonic_min_blocks", "temperature_bin_c"):
-            if not getattr(self, name) > 0:
-                raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be > 0")
-        if not 0 <= self.poly_degree <= 3:
-            raise InputError(f"diagnose.poly_degree = {self.poly_degree!r}: the baseline is at most cubic (0..3)")
-        if not 0.0 < self.detection_power < 1.0:
-            raise InputError(f"diagnose.detection_power = {self.detection_power!r} must be between 0 and 1")
-        if self.tau_grid_points < 2:
-            raise InputError(f"diagnose.tau_grid_points = {self.tau_grid_points!r} must be at least 2 (a grid from lo to hi)")
-        if self.bias_correlation_points < 2:
-            raise InputError(f"diagnose.bias_correlation_points = {self.bias_correlation_points!r} must be at least 2 (a grid from lo to hi)")
-        if self.periodic_harmonics < 1:
-            raise InputError(f"diagnose.periodic_harmonics = {self.periodic_harmonics!r} must be at least 1 (the sinusoid)")
-        if self.bias_correlation_search_blocks < 16:
-            raise InputError(f"diagnose.bias_correlation_search_blocks = {self.bias_correlation_search_blocks!r} must be at least 16")
-        if self.max_blocks < 16:
-            raise InputError(f"diagnose.max_blocks = {self.max_blocks!r} must be at least 16")
-
-
-def get_config(path="diagnose") -> DiagnoseSettings:
-    """Bind the ``[diagnose]`` table of a TOML file (default: the shipped ``configs/diagnose.toml``)."""
-    return bind(DiagnoseSettings, check_tables(load_config(path), ("diagnose",), str(path)).get("diagnose", {}), f"{path} [diagnose]")
 
 
 def diagnose(
@@ -148,8 +85,6 @@ def diagnose(
     *,
     start_effects=(),
     callback=None,
-    unexplained_settings: _unexplained.UnexplainedSettings = _unexplained.UnexplainedSettings(),
-    signature_settings: _signature.SignatureSettings = _signature.SignatureSettings(),
 ) -> dict:
     """Diagnose the gap between recordings and the calibrated baseline simulator.
 
@@ -167,10 +102,6 @@ def diagnose(
         part of the baseline, not candidates.
     callback : callable(done, total), optional
         Progress over candidate fits.
-    unexplained_settings : gyrocomp.diagnose.unexplained.UnexplainedSettings
-        The residual tests after selection.
-    signature_settings : gyrocomp.diagnose.signature.SignatureSettings
-        The check a noise term must pass on the selection runs to be selected.
 
     Returns
     -------
@@ -202,7 +133,7 @@ def diagnose(
     candidates = [e for e in EFFECTS if e not in skipped and e not in start_effects]
 
     def admissible(runs, model, effect):
-        return _signature.check(effect, runs, model, signature_settings).ok
+        return _signature.check(effect, runs, model, s).ok
 
     with threadpool_limits(limits=1, user_api="blas"):
         start = _start_model(fit_p, start_effects)
@@ -219,9 +150,8 @@ def diagnose(
             search,
             labelled,
             selected,
-            unexplained_settings,
+            s,
             None if gapped else [gaps["baseline"][label]["residual"] for label, _ in labelled],
-            signature_settings,
         )
         if verdict["unlisted"]:
             steps.append({"move": "confirm", "accepted": None, "dropped": [u["effect"] for u in verdict["unlisted"]]})
@@ -272,7 +202,7 @@ def diagnose(
         ),
         "candidates": cand,
         "selection": {"error_rate": error_rate(candidates, first_step, sum(p.y.size for p in selection), s.bic_margin,
-                                               unexplained_settings.family_alpha, signature_settings.family_alpha)},
+                                               s.unexplained.family_alpha, s.signature.refusal_alpha)},
         "selection_steps": steps,
         "skipped": skipped,
         "models": {name: _model_dict(m, start_effects) for name, m in models.items()},

@@ -43,6 +43,7 @@ from scipy import stats
 from gyrocomp.diagnose import signature
 from gyrocomp.diagnose import unexplained as _unexplained
 from gyrocomp.diagnose.effects import KINDS, PER_RUN
+from gyrocomp.diagnose.settings import DiagnoseSettings
 from gyrocomp.diagnose.signature import TERMS
 from gyrocomp.effects.likelihood import fit_noise, profile_deviance
 
@@ -82,8 +83,7 @@ class Round:
         :func:`gyrocomp.diagnose.unexplained.verdict` of `model` (present).
     prepared : list
         The runs prepared by the verdict (their tests and structures).
-    settings : UnexplainedSettings
-    signature_settings : SignatureSettings
+    settings : gyrocomp.diagnose.settings.DiagnoseSettings
     """
 
     search: object
@@ -92,8 +92,7 @@ class Round:
     chosen: tuple
     verdict: dict
     prepared: list
-    settings: _unexplained.UnexplainedSettings
-    signature_settings: signature.SignatureSettings
+    settings: DiagnoseSettings
 
     def run(self, label):
         """The Problem labelled `label`, or None."""
@@ -104,8 +103,7 @@ class Round:
         return [e for e in self.chosen if e not in TERMS and KINDS[e].per_run]
 
 
-def confirm(search, runs, model, settings: _unexplained.UnexplainedSettings = _unexplained.UnexplainedSettings(),
-            baseline_residuals=None, signature_settings: signature.SignatureSettings = signature.SignatureSettings()):
+def confirm(search, runs, model, settings: DiagnoseSettings = DiagnoseSettings(), baseline_residuals=None):
     """Unlist the selected effects that :data:`RULES` refute while something is unexplained; the final verdict.
 
     Parameters
@@ -118,8 +116,9 @@ def confirm(search, runs, model, settings: _unexplained.UnexplainedSettings = _u
         ``"fit"`` is the one searched for structures.
     model : gyrocomp.diagnose.select.Fitted
         The selected model.
-    settings, baseline_residuals, signature_settings
-        As :func:`gyrocomp.diagnose.unexplained.verdict`.
+    settings, baseline_residuals
+        As :func:`gyrocomp.diagnose.unexplained.verdict`; the rules' own
+        numbers are ``settings.confirm``.
 
     Returns
     -------
@@ -133,11 +132,11 @@ def confirm(search, runs, model, settings: _unexplained.UnexplainedSettings = _u
     kept = len(search.baseline.order)
     unlisted = []
     while True:
-        result, prepared = _unexplained.assess(runs, model, settings, baseline_residuals, signature_settings)
+        result, prepared = _unexplained.assess(runs, model, settings, baseline_residuals)
         chosen = tuple(model.order[kept:])
         if not result["present"] or not chosen:
             break
-        state = Round(search, list(runs), model, chosen, result, prepared, settings, signature_settings)
+        state = Round(search, list(runs), model, chosen, result, prepared, settings)
         entry = next((u for rule in RULES if (u := rule(state)) is not None), None)
         if entry is None:
             break
@@ -175,7 +174,7 @@ def noise_standing_in(state: Round) -> Unlisting | None:
             standing_in[term] = gain
         elif not sig["own_ok"] and (
             G is None or sig["tone_repeats"]
-            or not signature.check(term, problems, state.model, state.signature_settings,
+            or not signature.check(term, problems, state.model, state.settings,
                                    [G if p is fit_p else np.empty((p.y.size, 0)) for p in problems]).own_ok
         ):
             standing_in[term] = -np.inf
@@ -211,7 +210,7 @@ def refuted_on_holdout(state: Round) -> Unlisting | None:
     held = state.run("holdout")
     if held is None:
         return None
-    alpha = state.settings.replication_alpha
+    alpha = state.settings.confirm.replication_alpha
     p = {e: replication(held, state.model, e) for e in state.per_run()}
     lost = {e: v for e, v in p.items() if v > alpha and visible(held, state.model, e, alpha)}
     if not lost:
@@ -227,7 +226,7 @@ def unsteady(state: Round) -> Unlisting | None:
     An interference keeps its amplitude and phase, where a sinusoid fitted
     to a transient or to a wander that comes late does not.
     """
-    s = state.settings
+    s = state.settings.confirm
     problems = [q for _, q in state.runs]
     p = {e: steadiness(problems, state.model, e, s.steady_segments, s.steady_min_cycles) for e in state.per_run()}
     p = {e: v for e, v in p.items() if v < s.replication_alpha}

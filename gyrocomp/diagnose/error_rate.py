@@ -17,8 +17,8 @@ Two errors are possible on a recording the vocabulary explains:
 * **a false "unexplained"** -- the residual tests (every test on every
   run, one family) reject by Holm's step-down procedure at
   ``family_alpha``: the family-wise rate is at most ``family_alpha``; a
-  selected noise term's signature adds its own ``[signature]
-  family_alpha`` (Bonferroni).
+  selected noise term's signature adds its own ``[diagnose.signature]
+  refusal_alpha`` (Bonferroni).
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 All three break a residual (rate minus the calibrated model) down against
 the calibrated simulation's noise model:
 
-* **regime** -- soak / ramp (``|dT/dt|`` below or above `soak_rate_c_per_min`),
+* **regime** -- soak / ramp (``|dT/dt|`` below or above `checks.soak_rate_c_per_min`),
   heating / cooling, the warm-up window after power-on and temperature bins:
   the mean and RMS of the residual's `smooth_s` moving mean in each, beside
   the RMS the noise model predicts for that moving mean (white part);
@@ -46,7 +46,7 @@ def regimes(time_s, temperature_c, residual_dps, fs_hz, noise: NoiseModel, setti
     masks["after_warmup"] = ~masks["warmup_window"]
     if temperature_c is not None:
         rate = shapes.temperature_rate(t, temperature_c, smooth_s=settings.smooth_s) * 60.0
-        thr = settings.soak_rate_c_per_min
+        thr = settings.checks.soak_rate_c_per_min
         masks["soak"] = np.abs(rate) < thr
         masks["ramp"] = ~masks["soak"]
         masks["heating"] = rate >= thr

@@ -26,10 +26,10 @@ c. **timescales** -- at every octave ``tau`` where the term carries at least
    two levels it switches between (``levels``, pooled over the runs).
 
 Every test returns a p-value; all tests of a term (on all runs) share
-``family_alpha`` by Bonferroni, the family's size counted from what the
+``refusal_alpha`` by Bonferroni, the family's size counted from what the
 registry's checks returned (:func:`gyrocomp.diagnose.checks.family_size`),
 so a noise term that *is* what the model says is refused with probability
-at most ``family_alpha``. The tests of the term's own statistics
+at most ``refusal_alpha``. The tests of the term's own statistics
 (:data:`gyrocomp.diagnose.checks.OWN`, and ``extreme`` when its
 stationarity drives it) say whether the noise is of the kind claimed
 (``own_ok``); the others may also fail for a structure beside a true noise
@@ -43,7 +43,6 @@ import types
 
 import numpy as np
 
-from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose.checks import KINDS, SIGNATURE, as_dict, family_size
 from gyrocomp.diagnose.checks import agreement as _agreement
 from gyrocomp.diagnose.checks import levels as _levels
@@ -56,40 +55,13 @@ from gyrocomp.diagnose.checks.levels import level_test
 from gyrocomp.diagnose.checks.ljung_box import ljung_box
 from gyrocomp.diagnose.checks.spectrum import tone_replication
 from gyrocomp.diagnose.checks.step import step_scan
+from gyrocomp.diagnose.settings import ChecksSettings, DiagnoseSettings
 from gyrocomp.effects.likelihood import block_means, fit_noise
 
-__all__ = ["SignatureSettings", "Signature", "get_config", "check", "innovations", "score_test", "ljung_box", "column_scores", "threshold_scan", "step_scan", "temperature_bins", "temperature_edges", "level_test", "bartlett", "tone_replication"]
+__all__ = ["Signature", "check", "innovations", "score_test", "ljung_box", "column_scores", "threshold_scan", "step_scan", "temperature_bins", "temperature_edges", "level_test", "bartlett", "tone_replication"]
 
 TERMS = ("rate_random_walk", "bias_instability")
 """The noise terms a signature is checked for."""
-
-
-@dataclasses.dataclass(frozen=True)
-class SignatureSettings:
-    """The ``[signature]`` table; defaults equal ``configs/unexplained.toml`` (reasons there)."""
-
-    family_alpha: float = 0.01
-    ljung_box_lags: int = 10
-    max_blocks: int = 240
-    profile_span: tuple = (-10.0, 6.0)
-    profile_points: int = 33
-    explains_share: float = 0.5
-    min_allan_windows: int = 4
-    temperature_bins: int = 8
-    time_bins: int = 16
-    min_step_blocks: int = 4
-    temperature_step_bins: int = 64
-    stationarity_segments: int = 4
-    min_segment_increments: int = 4
-    two_level_draws: int = 100
-    two_level_iterations: int = 40
-    two_level_seed: int = 0
-    spectrum_parts: tuple = (2, 4, 8)
-
-
-def get_config(path="unexplained") -> SignatureSettings:
-    """Bind the ``[signature]`` table of a TOML file (default: the shipped ``configs/unexplained.toml``)."""
-    return bind(SignatureSettings, load_config(path).get("signature", {}), f"{path} [signature]")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -99,7 +71,7 @@ class Signature:
     Attributes
     ----------
     ok : bool
-        Every test passed at its Bonferroni share of ``family_alpha``.
+        Every test passed at its Bonferroni share of ``refusal_alpha``.
     reasons : tuple of str
         One sentence per failed test (empty when `ok`).
     stats : dict
@@ -126,7 +98,7 @@ class Signature:
     tone_repeats: bool = False
 
 
-def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), extra=None) -> Signature:
+def check(term, runs, model, settings: DiagnoseSettings = DiagnoseSettings(), extra=None) -> Signature:
     """Whether noise `term` of `model` shows its own signature on `runs`.
 
     Parameters
@@ -140,7 +112,8 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
         A model with `term` in its noise (selected, or proposed: the trial
         model); its ``spec`` (deterministic shapes, coefficients refitted on
         each run) and ``noise`` are used.
-    settings : SignatureSettings
+    settings : gyrocomp.diagnose.settings.DiagnoseSettings
+        Its ``signature.refusal_alpha`` and the checks' ``checks``.
     extra : sequence of ndarray, optional
         Block-level columns added to each run's design (one array of shape
         ``(n_blocks, q)`` per run): the term judged beside structures found
@@ -153,7 +126,7 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
     """
     if term not in TERMS:
         raise ValueError(f"{term!r}: a signature is checked for {TERMS}")
-    s = settings
+    s = settings.checks
     if not getattr(model.noise, term) > 0.0:
         return Signature(False, (f"{term} has level 0 in the model",), {}, False)
     designs = [p.design_blocks(model.spec)[0] for p in runs]
@@ -177,14 +150,14 @@ def check(term, runs, model, settings: SignatureSettings = SignatureSettings(), 
     between = {k: ([as_dict(r) for r in v] if isinstance(v, list) else (as_dict(v) if v is not None else None))
                for k, v in between.items()}
     n_tests = sum(family_size({k: v for k, v in out.items() if k != "noise"}) for out in per_run) + family_size(between)
-    alpha = s.family_alpha / max(n_tests, 1)
+    alpha = settings.signature.refusal_alpha / max(n_tests, 1)
     reasons, own_failed, tone_repeats = _reasons(runs, per_run, between, term, alpha)
     stats_out = {"alpha": alpha, "n_tests": n_tests, "agreement": between["agreement"], "levels": between["levels"],
                  "replication": between["replication"], "spectrum": between["spectrum"], "runs": per_run}
     return Signature(not reasons, tuple(reasons), stats_out, not own_failed, tone_repeats)
 
 
-def _run_tests(problem, X, noise, cov, whitened, term, s: SignatureSettings):
+def _run_tests(problem, X, noise, cov, whitened, term, s: ChecksSettings):
     """Tests (b) and (c) of the module docstring on one run: the registry's per-run and timescale checks.
 
     `cov` is the block means' covariance under `noise`, and `whitened` the

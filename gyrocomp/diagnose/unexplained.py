@@ -22,7 +22,7 @@ unexplained at most ``family_alpha``. A selected noise term must also show
 its own signature (:func:`gyrocomp.diagnose.signature.check`): one that
 does not stands in for a residual the vocabulary does not explain, and the
 verdict is present with its reasons (each term adds its own family rate,
-``[signature] family_alpha``, by Bonferroni).
+``[diagnose.signature] refusal_alpha``, by Bonferroni).
 
 For every test that rejects, :func:`verdict` says *where* (time window,
 temperature range, regime, timescale), gives a *hint* in words, and
@@ -41,60 +41,29 @@ References
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 from scipy import linalg, stats
 
-from gyrocomp.config import bind, load_config
 from gyrocomp.diagnose import signature
 from gyrocomp.diagnose.checks import DETERMINISTIC, KINDS, RESIDUAL, Frame, as_dict
 from gyrocomp.diagnose.checks._linear import column_scores
 from gyrocomp.diagnose.checks.noise_blocks import variance_groups, variance_segments
 from gyrocomp.diagnose.checks.spectral_line import fisher_g
 from gyrocomp.diagnose.signature import TERMS
+from gyrocomp.diagnose.settings import DiagnoseSettings
 from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise
 
-__all__ = ["UnexplainedSettings", "get_config", "verdict", "assess", "structure_found", "Prepared", "holm", "fisher_g", "variance_segments", "variance_groups"]
+__all__ = ["verdict", "assess", "structure_found", "Prepared", "holm", "fisher_g", "variance_segments", "variance_groups"]
 
 _DEG_H = 3600.0
 """deg/h per deg/s."""
 
 
-@dataclasses.dataclass(frozen=True)
-class UnexplainedSettings:
-    """The ``[unexplained]`` table; defaults equal ``configs/unexplained.toml`` (reasons there)."""
-
-    family_alpha: float = 0.01
-    temperature_bins: int = 8
-    temperature_scan_bins: tuple = (8, 16, 32, 64)
-    poweron_edges_s: tuple = (300.0, 900.0, 2700.0, 7200.0)
-    min_step_blocks: int = 4
-    temperature_step_bins: int = 64
-    noise_segments: int = 8
-    noise_min_ratio: float = 1.25
-    soak_rate_c_per_min: float = 0.05
-    time_segments: int = 8
-    line_min_cycles: int = 3
-    line_segments: int = 4
-    whiteness_lags: int = 10
-    replication_alpha: float = 0.01
-    steady_segments: int = 4
-    steady_min_cycles: float = 1.0
-    gap_block_s: float = 100.0
-
-
-def get_config(path="unexplained") -> UnexplainedSettings:
-    """Bind the ``[unexplained]`` table of a TOML file (default: the shipped ``configs/unexplained.toml``)."""
-    return bind(UnexplainedSettings, load_config(path).get("unexplained", {}), f"{path} [unexplained]")
-
-
 def verdict(
     runs,
     model,
-    settings: UnexplainedSettings = UnexplainedSettings(),
+    settings: DiagnoseSettings = DiagnoseSettings(),
     baseline_residuals=None,
-    signature_settings: signature.SignatureSettings = signature.SignatureSettings(),
 ) -> dict:
     """Test the residual of `model` on `runs` for structure it does not predict.
 
@@ -105,15 +74,17 @@ def verdict(
         providing ``y``, ``basis``, ``run`` and ``design_blocks(spec)``.
     model : gyrocomp.diagnose.select.Fitted
         The selected model (``spec`` and ``noise`` are used).
-    settings : UnexplainedSettings
+    settings : gyrocomp.diagnose.settings.DiagnoseSettings
+        ``unexplained.family_alpha``, the checks' ``checks``, ``gap_block_s``
+        (the share of the gap), and the signature's: a selected
+        ``rate_random_walk`` or ``bias_instability`` that does not show its
+        own signature (:func:`gyrocomp.diagnose.signature.check`, its own
+        false-refusal rate ``signature.refusal_alpha``) absorbs something the
+        vocabulary does not explain: the verdict is then present, with its
+        reasons.
     baseline_residuals : sequence of ndarray, optional
         Full-rate residual of the baseline on each run [deg/s], for the share
         of the gap.
-    signature_settings : gyrocomp.diagnose.signature.SignatureSettings
-        A selected ``rate_random_walk`` or ``bias_instability`` that does not
-        show its own signature (:func:`gyrocomp.diagnose.signature.check`,
-        its own family false-refusal rate) absorbs something the vocabulary
-        does not explain: the verdict is then present, with its reasons.
 
     Returns
     -------
@@ -124,10 +95,10 @@ def verdict(
         means and its ``share_of_gap``, None without `baseline_residuals`),
         ``tests`` (every test's statistic and p).
     """
-    return assess(runs, model, settings, baseline_residuals, signature_settings)[0]
+    return assess(runs, model, settings, baseline_residuals)[0]
 
 
-def structure_found(problem, model, s: UnexplainedSettings = UnexplainedSettings()):
+def structure_found(problem, model, s: DiagnoseSettings = DiagnoseSettings()):
     """Block-level columns of the deterministic structures the tests find on `problem` under `model`, or None.
 
     The deterministic tests of the run (Holm at ``family_alpha`` over that
@@ -136,19 +107,20 @@ def structure_found(problem, model, s: UnexplainedSettings = UnexplainedSettings
     """
     pr = Prepared("fit", problem, model, s)
     names = list(pr.tests)
-    rejected = holm([pr.tests[k]["p"] for k in names], s.family_alpha)
+    alpha = s.unexplained.family_alpha
+    rejected = holm([pr.tests[k]["p"] for k in names], alpha)
     found = [k for k, r in zip(names, rejected) if r and not k.startswith("noise_")]
-    kept = [k for k in pr.explain(found, s.family_alpha / max(len(names), 1)) if not k.startswith("noise_")]
+    kept = [k for k in pr.explain(found, alpha / max(len(names), 1)) if not k.startswith("noise_")]
     return pr.structure(kept) if kept else None
 
 
-def assess(runs, model, settings, baseline_residuals, signature_settings):
+def assess(runs, model, settings, baseline_residuals):
     """:func:`verdict` and the prepared runs (their structures, for :func:`gyrocomp.diagnose.confirm.confirm`)."""
     s = settings
     prepared = [Prepared(label, p, model, s) for label, p in runs]
     tests = [(pr, name, result) for pr in prepared for name, result in pr.tests.items()]
-    rejected = holm([t[2]["p"] for t in tests], s.family_alpha)
-    alpha = s.family_alpha / max(len(tests), 1)
+    rejected = holm([t[2]["p"] for t in tests], s.unexplained.family_alpha)
+    alpha = s.unexplained.family_alpha / max(len(tests), 1)
     where, hints = [], []
     for pr in prepared:
         names = [name for (q, name, _), r in zip(tests, rejected) if r and q is pr]
@@ -161,7 +133,7 @@ def assess(runs, model, settings, baseline_residuals, signature_settings):
     signatures = {}
     for term in TERMS:
         if term in getattr(model, "order", ()) and getattr(model.noise, term) > 0.0:
-            sig = signature.check(term, [p for _, p in runs], model, signature_settings)
+            sig = signature.check(term, [p for _, p in runs], model, s)
             signatures[term] = {"ok": sig.ok, "own_ok": sig.own_ok, "tone_repeats": sig.tone_repeats, "reasons": list(sig.reasons)}
             if not sig.ok:
                 where.append({"run": "all", "test": f"signature:{term}", "p": sig.stats.get("alpha")})
@@ -172,9 +144,9 @@ def assess(runs, model, settings, baseline_residuals, signature_settings):
         size[pr.label] = pr.size(base, s)
     return {
         "present": bool(any(rejected) or any(not v["ok"] for v in signatures.values())),
-        "family_alpha": s.family_alpha,
+        "family_alpha": s.unexplained.family_alpha,
         "signatures": signatures,
-        "signature_alpha": signature_settings.family_alpha if signatures else None,
+        "signature_alpha": s.signature.refusal_alpha if signatures else None,
         "where": where,
         "hints": hints,
         "size": size,
@@ -203,7 +175,7 @@ def holm(p_values, alpha):
 class Prepared(Frame):
     """One run: its innovations under the model, its structure columns and the registry's checks on it."""
 
-    def __init__(self, label, problem, model, s: UnexplainedSettings):
+    def __init__(self, label, problem, model, s: DiagnoseSettings):
         self.label, self.problem = label, problem
         y, basis, run = problem.y, problem.basis, problem.run
         self.X = problem.design_blocks(model.spec)[0]
@@ -214,7 +186,7 @@ class Prepared(Frame):
         t = block_means(run.time_s, run.n_per_block)[:n] - run.time_s[0]
         temp = block_means(run.temperature_c, run.n_per_block)[:n] if run.temperature_c is not None else None
         lower = linalg.cholesky(basis.covariance(self.noise), lower=True, check_finite=False)
-        super().__init__(lower, t, temp, basis.block_s, s, samples=(run.rate_dps, run.n_per_block, run.fs_hz))
+        super().__init__(lower, t, temp, basis.block_s, s.checks, samples=(run.rate_dps, run.n_per_block, run.fs_hz))
         self.tests = self._deterministic_tests(np.empty((n, 0)))
         e, Xw, _ = self._innovations(np.empty((n, 0)))
         for name in RESIDUAL:
@@ -413,7 +385,7 @@ class Prepared(Frame):
         e, Xw, _ = self._innovations(np.empty((self.t.size, 0)))
         return int(np.argmax(np.abs(column_scores(e, Xw, self.lower, G)[0])))
 
-    def size(self, baseline_residual, s: UnexplainedSettings):
+    def size(self, baseline_residual, s: DiagnoseSettings):
         """RMS [deg/h] of the kept deterministic structures (fitted jointly) and their share of the baseline's gap."""
         f = self._part([k for k in self.kept if not k.startswith("noise_")])[0]
         out = {"rms_deg_h": float(np.sqrt(np.mean(f * f)) * _DEG_H), "share_of_gap": None}

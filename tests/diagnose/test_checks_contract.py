@@ -31,8 +31,7 @@ from gyrocomp.diagnose.checks._linear import innovations, whiten
 from gyrocomp.diagnose.checks.extreme import bartlett
 from gyrocomp.diagnose.checks.levels import level_test
 from gyrocomp.diagnose.checks.spectrum import tone_replication
-from gyrocomp.diagnose.signature import SignatureSettings
-from gyrocomp.diagnose.unexplained import UnexplainedSettings
+from gyrocomp.diagnose.settings import ChecksSettings
 
 N_BLOCKS = 240
 BLOCK_S = 60.0
@@ -58,11 +57,8 @@ LOWER = np.linalg.cholesky(COV)
 
 
 def _frame(check, rate, rng):
-    """The frame a check sees (the verdict's settings, or the signature's for its checks)."""
-    frame = Frame(LOWER, T, TEMP, BLOCK_S, UnexplainedSettings(), samples=(rate, PER_BLOCK, 1.0 / BLOCK_S * PER_BLOCK))
-    if "residual" not in check.families:
-        frame = types.SimpleNamespace(**(vars(frame) | {"settings": SignatureSettings()}))
-    return frame
+    """The frame a check sees (the checks' settings, one section for the verdict's and the signature's)."""
+    return Frame(LOWER, T, TEMP, BLOCK_S, ChecksSettings(), samples=(rate, PER_BLOCK, 1.0 / BLOCK_S * PER_BLOCK))
 
 
 def _draw(check, rng, added=None):
@@ -163,8 +159,8 @@ def _replication_runs(rng, shared=None):
 def test_the_replication_check_is_uniform_and_finds_a_residual_that_repeats():
     check = KINDS["replication"]
     rng = np.random.default_rng(10)
-    p = np.array([r.pvalue for _ in range(100) for r in check.test(*_replication_runs(rng), SignatureSettings())])
+    p = np.array([r.pvalue for _ in range(100) for r in check.test(*_replication_runs(rng), ChecksSettings())])
     assert stats.kstest(p, "uniform").pvalue > 1e-3
     bump = 10.0 * np.exp(-0.5 * ((T - 4000.0) / 900.0) ** 2)
-    found = check.test(*_replication_runs(rng, bump), SignatureSettings())
+    found = check.test(*_replication_runs(rng, bump), ChecksSettings())
     assert min(r.pvalue for r in found if r.where["of"] == "time") < 1e-4

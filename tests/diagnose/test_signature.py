@@ -15,6 +15,7 @@ import pytest
 from scipy import stats
 
 from gyrocomp.diagnose import DiagnoseSettings
+from gyrocomp.diagnose.settings import ChecksSettings
 from gyrocomp.diagnose import confirm as cf
 from gyrocomp.diagnose import signature as sg
 from gyrocomp.diagnose.checks import spectrum
@@ -60,6 +61,11 @@ def _recording(seed, kind="none", amp=0.0, rrw=0.0, bias=0.0, hours=8.0, fs=1.0)
     return t, x, temp, fs
 
 
+def _with_checks(**changes):
+    """The default settings with the checks' `changes`."""
+    return dataclasses.replace(DiagnoseSettings(), checks=dataclasses.replace(ChecksSettings(), **changes))
+
+
 def _problems(*recordings, block_s=40.0):
     scale = TemperatureScale.of(recordings[0][2])
     return [
@@ -72,10 +78,6 @@ def _check(term, kind="none", amp=0.0, seed=0, **noise):
     runs = _problems(_recording(seed, kind, amp, **noise), _recording(seed + 1000, kind, amp, **noise))
     model = extend(runs[0], fit_baseline(runs[0]), term)
     return sg.check(term, runs, model)
-
-
-def test_config_matches_defaults():
-    assert sg.get_config() == sg.SignatureSettings()
 
 
 @pytest.mark.parametrize("seed", [1, 2])
@@ -124,9 +126,9 @@ def test_one_off_transient_is_refused_as_not_stationary():
     # carry their spread in one part of the run; and, at one time after power-on in both runs, its power repeats
     runs = _problems(_recording(10, "transient", 0.004), _recording(1010, "transient", 0.004))
     model = extend(runs[0], fit_baseline(runs[0]), "rate_random_walk")
-    off = sg.SignatureSettings(min_segment_increments=10**6, spectrum_parts=())
+    off = _with_checks(min_segment_increments=10**6, spectrum_parts=())
     assert sg.check("rate_random_walk", runs, model, off).ok
-    result = sg.check("rate_random_walk", runs, model, dataclasses.replace(sg.SignatureSettings(), spectrum_parts=()))
+    result = sg.check("rate_random_walk", runs, model, _with_checks(spectrum_parts=()))
     assert not result.ok and not result.own_ok
     assert any("change their spread" in r for r in result.reasons), result.reasons
     assert all(out["extreme"]["by"] == "stationary" for out in result.stats["runs"])
@@ -140,7 +142,7 @@ def test_a_chirp_that_repeats_after_power_on_is_not_flicker():
     # at the same time and period in both runs, where a wander's does not
     runs = _problems(_recording(41, "chirp", 0.0006), _recording(1041, "chirp", 0.0006))
     model = extend(runs[0], fit_baseline(runs[0]), "bias_instability")
-    assert sg.check("bias_instability", runs, model, dataclasses.replace(sg.SignatureSettings(), spectrum_parts=())).ok
+    assert sg.check("bias_instability", runs, model, _with_checks(spectrum_parts=())).ok
     result = sg.check("bias_instability", runs, model)
     assert not result.ok and not result.own_ok
     assert len(result.reasons) == 1 and "repeats in every run" in result.reasons[0], result.reasons
@@ -186,7 +188,7 @@ def test_tone_replication_needs_contiguous_blocks_of_one_length():
     steady = NoiseBasis(40, 10.0)
     gapped = NoiseBasis(40, 10.0, np.r_[np.arange(20), np.arange(30, 50)] * 10.0)
     assert steady.contiguous and not gapped.contiguous
-    settings = sg.SignatureSettings()
+    settings = ChecksSettings()
     for bases, compared in [((steady, steady), True), ((steady, gapped), False), ((steady, NoiseBasis(40, 20.0)), False)]:
         runs = [types.SimpleNamespace(basis=b) for b in bases]
         assert (spectrum.test(runs, e, settings) is not None) == compared

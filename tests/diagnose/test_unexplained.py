@@ -8,6 +8,7 @@ of 1 degC/min ramps and soaks (25, 50, 20, 35 degC) at 1 Hz (720 blocks of 10 s)
 (offset + cubic + white noise) fitted by :func:`gyrocomp.diagnose.select.fit_baseline`.
 """
 
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -16,6 +17,7 @@ import pytest
 from scipy import stats
 
 from gyrocomp.diagnose import DiagnoseSettings
+from gyrocomp.diagnose.settings import ChecksSettings
 from gyrocomp.diagnose import confirm as cf
 from gyrocomp.diagnose import unexplained as ux
 from gyrocomp.diagnose.effects import Run, TemperatureScale
@@ -92,10 +94,6 @@ def _verdict(kind="none", amp=0.0, seed=0, terms=(), rrw=0.0):
     return ux.verdict(runs, model, baseline_residuals=residuals)
 
 
-def test_config_matches_defaults():
-    assert ux.get_config() == ux.UnexplainedSettings()
-
-
 @pytest.mark.parametrize(
     ("kind", "amp", "named", "check"),
     [
@@ -136,8 +134,8 @@ def test_a_narrow_temperature_dip_is_found_by_the_band_scan():
     t, x, temp = _recording(4, "temperature_dip", 0.004)
     problem = Problem(Run("fit", t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), TemperatureScale.of(temp), 3)
     model = fit_baseline(problem)
-    bins_only = ux.Prepared("fit", problem, model, ux.UnexplainedSettings(temperature_scan_bins=())).tests["temperature"]
-    scanned = ux.Prepared("fit", problem, model, ux.UnexplainedSettings()).tests["temperature"]
+    bins_only = ux.Prepared("fit", problem, model, dataclasses.replace(DiagnoseSettings(), checks=dataclasses.replace(ChecksSettings(), temperature_scan_bins=()))).tests["temperature"]
+    scanned = ux.Prepared("fit", problem, model, DiagnoseSettings()).tests["temperature"]
     assert 1e-3 < bins_only["p"] < 1e-2
     assert scanned["by"] == "band" and scanned["p"] < 1e-5
     lo, hi = scanned["band"]["temperature_c"]
@@ -155,7 +153,7 @@ def test_temperature_scan_false_alarm_rate(test):
     for seed in range(100, 140):
         t, x, temp = _recording(seed)
         problem = Problem(Run("fit", t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), TemperatureScale.of(temp), 3)
-        p.append(ux.Prepared("fit", problem, fit_baseline(problem), ux.UnexplainedSettings()).tests[test]["p"])
+        p.append(ux.Prepared("fit", problem, fit_baseline(problem), DiagnoseSettings()).tests[test]["p"])
     assert np.mean(np.array(p) < 0.05) <= 0.05 + 3.0 * np.sqrt(0.05 * 0.95 / len(p)), sorted(p)[:5]
 
 

@@ -18,7 +18,7 @@ Two rooms read the registry:
   at its ``family_alpha``;
 * a noise term's signature (:mod:`gyrocomp.diagnose.signature`) runs the
   checks of :data:`SIGNATURE`, per run and between runs, and Bonferroni
-  shares its ``family_alpha`` among as many tests as they returned.
+  shares its ``refusal_alpha`` among as many tests as they returned.
 
 :func:`family_size` counts a family's tests from what its checks returned,
 so that a check added to the registry enters its family's error rate.

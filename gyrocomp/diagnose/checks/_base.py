@@ -119,7 +119,7 @@ class Frame:
         Block-mean temperature [degC].
     block_s : float
         Block length [s].
-    settings : gyrocomp.diagnose.unexplained.UnexplainedSettings
+    settings : gyrocomp.diagnose.settings.ChecksSettings
     samples : tuple (rate, n_per_block, fs_hz), optional
         The full-rate rate [deg/s], for the sample-level noise checks.
 

@@ -30,7 +30,7 @@ class Timescales:
     lower : ndarray
         ``L``.
     settings
-        The signature's settings.
+        The checks' settings (:class:`gyrocomp.diagnose.settings.ChecksSettings`).
     """
 
     def __init__(self, problem, X, cov, lower, Xw, noise, term, s):

@@ -3,7 +3,7 @@
 A noise term's level is a property of the gyro, so the runs must agree on
 it: the likelihood-ratio statistic of one shared level against one level
 per run (each run's white level profiled out; each run's likelihood on at
-most ``max_blocks`` merged block means), profiled over ``profile_points``
+most ``agreement_max_blocks`` merged block means), profiled over ``profile_points``
 values of the term's log-variance across ``profile_span`` nats, is
 ``chi^2`` with ``n_runs - 1`` degrees of freedom under that hypothesis
 (Wilks; asymptotic). Each run's 95 % profile-likelihood interval is reported.
@@ -27,7 +27,7 @@ def test(runs, designs, noise: NoiseModel, term, s):
     grid = np.log(getattr(noise, term) ** 2) + np.linspace(*s.profile_span, s.profile_points)
     curves = []
     for p, X in zip(runs, designs):
-        y, Xm, basis = merge_blocks(p.y, X, p.basis, s.max_blocks)
+        y, Xm, basis = merge_blocks(p.y, X, p.basis, s.agreement_max_blocks)
         curves.append(np.array([_profile_white(y, Xm, basis, noise, term, g) for g in grid]))
     curves = np.array(curves)
     lows = curves.min(axis=1)

@@ -2,7 +2,7 @@
 
 A telegraph noise under white noise, or a wander the noise terms'
 signature refused: Ljung-Box ``Q`` of the innovations over
-``whiteness_lags`` lags, ``chi^2_h``
+``ljung_box_lags`` lags, ``chi^2_h``
 (:func:`gyrocomp.diagnose.checks.ljung_box.ljung_box`), with the lag
 correlations for the report.
 """
@@ -15,7 +15,7 @@ from gyrocomp.diagnose.checks._base import Check, Result
 
 def test(frame, e, Xw):
     """``Q``, its lags and the lag correlations ``rho``."""
-    lags = min(frame.settings.whiteness_lags, e.size // 4)
+    lags = min(frame.settings.ljung_box_lags, e.size // 4)
     q, p = _lb.ljung_box(e, lags)
     x = e - e.mean()
     rho = [float(x[k:] @ x[:-k] / (x @ x)) for k in range(1, lags + 1)]
