@@ -85,12 +85,14 @@ def median_interval(time: np.ndarray) -> float:
 def _interval_rank(time: np.ndarray, k: int) -> tuple[np.float64, int]:
     """The `k`-th smallest (0-based) of the intervals ``np.diff(time)``, and how many intervals are at most it.
 
-    Selection by pivots, each pass over the intervals :data:`_CHECK_ROWS`
-    at a time: the pivot is a quantile of a strided sample of the
-    intervals still in play, so a regular time axis (a few distinct
-    intervals) takes one pass; once no more than :data:`_MEDIAN_ROWS`
-    remain in play they are gathered and partitioned. Exact: the value
-    is one of the intervals, the same as ``np.partition(np.diff(time), k)[k]``.
+    Selection by two pivots (Floyd and Rivest's), each pass over the
+    intervals :data:`_CHECK_ROWS` at a time: the pivots are the quantiles
+    of a strided sample of the intervals still in play, 2 sqrt(size) ranks
+    either side of the `k`-th's, so the `k`-th lies between them but few
+    others do. A regular time axis (a few distinct intervals) takes one
+    pass, a jittered one two; once no more than :data:`_MEDIAN_ROWS` remain
+    in play they are gathered and partitioned. Exact: the value is one of
+    the intervals, the same as ``np.partition(np.diff(time), k)[k]``.
     """
     n = len(time) - 1
     lo, hi, below, left = -np.inf, np.inf, 0, n  # the k-th lies in (lo, hi); `below` intervals are <= lo, `left` in (lo, hi)
@@ -102,21 +104,30 @@ def _interval_rank(time: np.ndarray, k: int) -> tuple[np.float64, int]:
             return value, below + int(np.count_nonzero(inside <= value))
         start = time[:-1:stride]
         sample = time[1::stride][: len(start)] - start
-        sample = sample[(sample > lo) & (sample < hi)]
+        sample = np.sort(sample[(sample > lo) & (sample < hi)])
         if not sample.size:  # the sample missed every interval in play: take the first chunk holding one
-            sample = next(d for d in _intervals_between(time, lo, hi) if d.size)
-        q = min(int((k - below) / left * sample.size), sample.size - 1)
-        pivot = np.partition(sample, q)[q]
-        less = equal = 0
+            sample = np.sort(next(d for d in _intervals_between(time, lo, hi) if d.size))
+        q = (k - below) / left * sample.size
+        spread = 2.0 * math.sqrt(sample.size)
+        a = sample[min(max(int(q - spread), 0), sample.size - 1)]
+        b = sample[min(max(int(q + spread), 0), sample.size - 1)]
+        below_a = upto_a = below_b = upto_b = 0  # in play and < a, <= a, < b, <= b
         for d in _intervals_between(time, lo, hi):
-            less += int(np.count_nonzero(d < pivot))
-            equal += int(np.count_nonzero(d == pivot))
-        if below + less <= k < below + less + equal:
-            return pivot, below + less + equal
-        if k < below + less:
-            hi, left = pivot, less
+            below_a += int(np.count_nonzero(d < a))
+            upto_a += int(np.count_nonzero(d <= a))
+            below_b += int(np.count_nonzero(d < b))
+            upto_b += int(np.count_nonzero(d <= b))
+        rank = k - below
+        if rank < below_a:
+            hi, left = a, below_a
+        elif rank < upto_a:
+            return a, below + upto_a
+        elif rank < below_b:
+            lo, hi, below, left = a, b, below + upto_a, below_b - upto_a
+        elif rank < upto_b:
+            return b, below + upto_b
         else:
-            lo, below, left = pivot, below + less + equal, left - less - equal
+            lo, below, left = b, below + upto_b, left - upto_b
 
 
 def _intervals_between(time: np.ndarray, lo: float, hi: float) -> Iterator[np.ndarray]:
