@@ -42,7 +42,7 @@ References
 from __future__ import annotations
 
 import numpy as np
-from scipy import linalg, stats
+from scipy import linalg
 
 from gyrocomp.diagnose import signature
 from gyrocomp.diagnose.checks import DETERMINISTIC, KINDS, RESIDUAL, Frame, as_dict
@@ -288,33 +288,8 @@ class Prepared(Frame):
     def describe(self, name):
         """Where the structure `name` lies and a sentence about its shape."""
         result = self.tests[name]
-        if name == "noise_temperature":
-            std = np.asarray(result["std"])
-            hi, lo = result["temperature_c"][int(np.argmax(std))], result["temperature_c"][int(np.argmin(std))]
-            return (
-                {"temperature_c": hi, "ratio": result["ratio"]},
-                f"the sample (white) noise depends on temperature: {result['ratio']:.2f} times larger at "
-                f"{hi[0]:.1f}-{hi[1]:.1f} degC than at {lo[0]:.1f}-{lo[1]:.1f} degC",
-            )
-        if name == "noise_correlation":
-            rho = result["rho"]
-            return (
-                {"timescale_s": [self.block_s, result["lags"] * self.block_s]},
-                f"the residual is correlated beyond the model's noise (Ljung-Box over {result['lags']} lags of "
-                f"{self.block_s:.0f} s; lag-1 correlation {rho[0]:+.2f}): a correlated noise (telegraph, Markov) "
-                "or a slow structure that no vocabulary noise term takes with its own signature",
-            )
         if name.startswith("noise_"):
-            std = np.asarray(result["std"])
-            k_hi, k_lo = int(np.argmax(std)), int(np.argmin(std))
-            seg = self.duration_s / std.size
-            level = "block-mean (slow)" if name == "noise_blocks" else "sample (white)"
-            return (
-                {"time_s": [k_hi * seg, (k_hi + 1) * seg], "ratio": result["ratio"]},
-                f"the {level} noise changes over the run: {result['ratio']:.2f} times larger in "
-                f"{k_hi * seg / 3600:.1f}-{(k_hi + 1) * seg / 3600:.1f} h than in "
-                f"{k_lo * seg / 3600:.1f}-{(k_lo + 1) * seg / 3600:.1f} h",
-            )
+            return self._describe_noise(name, result)
         f, coef = self._part([name])
         f_dh = f * _DEG_H
         amp = float(np.sqrt(np.mean(f_dh**2)))
@@ -378,6 +353,35 @@ class Prepared(Frame):
         return (
             {"timescale_s": period},
             f"a periodic component of period {period:.0f} s (amplitude {amp * np.sqrt(2.0):.3g} deg/h)",
+        )
+
+    def _describe_noise(self, name, result):
+        """:meth:`describe` of a noise check (``noise_temperature``, ``noise_correlation``, ``noise_blocks``, ``noise_samples``)."""
+        if name == "noise_temperature":
+            std = np.asarray(result["std"])
+            hi, lo = result["temperature_c"][int(np.argmax(std))], result["temperature_c"][int(np.argmin(std))]
+            return (
+                {"temperature_c": hi, "ratio": result["ratio"]},
+                f"the sample (white) noise depends on temperature: {result['ratio']:.2f} times larger at "
+                f"{hi[0]:.1f}-{hi[1]:.1f} degC than at {lo[0]:.1f}-{lo[1]:.1f} degC",
+            )
+        if name == "noise_correlation":
+            rho = result["rho"]
+            return (
+                {"timescale_s": [self.block_s, result["lags"] * self.block_s]},
+                f"the residual is correlated beyond the model's noise (Ljung-Box over {result['lags']} lags of "
+                f"{self.block_s:.0f} s; lag-1 correlation {rho[0]:+.2f}): a correlated noise (telegraph, Markov) "
+                "or a slow structure that no vocabulary noise term takes with its own signature",
+            )
+        std = np.asarray(result["std"])
+        k_hi, k_lo = int(np.argmax(std)), int(np.argmin(std))
+        seg = self.duration_s / std.size
+        level = "block-mean (slow)" if name == "noise_blocks" else "sample (white)"
+        return (
+            {"time_s": [k_hi * seg, (k_hi + 1) * seg], "ratio": result["ratio"]},
+            f"the {level} noise changes over the run: {result['ratio']:.2f} times larger in "
+            f"{k_hi * seg / 3600:.1f}-{(k_hi + 1) * seg / 3600:.1f} h than in "
+            f"{k_lo * seg / 3600:.1f}-{(k_lo + 1) * seg / 3600:.1f} h",
         )
 
     def _strongest(self, G):
