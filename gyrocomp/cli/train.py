@@ -116,7 +116,8 @@ def greybox_line(fitted: dict) -> str:
         parts.append("temp_rate" + (" heating/cooling apart" if spec["rate_form"] == 2 else "") + f" (filter {spec['rate_tau_s']:.3g} s"
                      + (f", saturating at {60 * saturation:.3g} degC/min" if saturation else "") + ")")
     if spec["width_c"]:
-        parts.append(f"hysteresis width {spec['width_c']:.3g} degC")
+        parts.append(f"hysteresis {spec.get('hysteresis_operator', 'play')} width {spec['width_c']:.3g} degC"
+                     + (f" and play width {spec['width2_c']:.3g} degC" if spec.get("width2_c") else ""))
     if spec["tau_w_s"]:
         parts.append(f"warmup tau {spec['tau_w_s']:.4g} s" + (f" and {spec['tau_w2_s']:.4g} s" if spec.get("tau_w2_s") else ""))
     return "greybox: cubic in T_e" + "".join(f" + {p}" for p in parts)

@@ -18,7 +18,9 @@ them:
   smoothed derivative: what firmware can compute, with no look-ahead);
 * the play operator's centre ``p``, held within ``w / 2`` of T
   (:func:`gyrocomp.effects.shapes.hysteresis_play`); over a linear stretch the
-  clamp at its end is exact, the input being monotone between samples;
+  clamp at its end is exact, the input being monotone between samples; a
+  second play of another width likewise (two plays: the first terms of a
+  Prandtl-Ishlinskii sum, a spread of widths);
 * or, in its place, a direction relay of width ``w``
   (:func:`gyrocomp.effects.shapes.hysteresis_branch`): +1 once the
   temperature has risen ``w`` above its lowest value since the last switch,
@@ -39,9 +41,9 @@ import math
 import numba
 import numpy as np
 
-N_STATE = 10
+N_STATE = 11
 """State entries: started flag, previous time, previous temperature, T_e, T_f, play centre, relay branch,
-highest and lowest temperature since the relay's last switch, second T_e."""
+highest and lowest temperature since the relay's last switch, second T_e, second play centre."""
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -73,8 +75,9 @@ def _relay(state, T, width):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e2, series, out):
-    """Columns ``T_e``, ``dT/dt``, hysteresis output, second ``T_e`` of each sample into `out` (n, 4); `state` updated in place.
+def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e2, series, half_width2, out):
+    """Columns ``T_e``, ``dT/dt``, hysteresis output, second ``T_e``, second play output of each sample into `out` (n, 5);
+    `state` updated in place.
 
     Parameters
     ----------
@@ -92,7 +95,9 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
         (output ``(T - p) / (w / 2)`` in [-1, 1]).
     series : bool
         The second element temperature lags ``T_e`` (in series), not T.
-    out : ndarray, shape (n, 4)
+    half_width2 : float
+        Half the width of a second play [degC] (0: none, output 0).
+    out : ndarray, shape (n, 5)
     """
     h_weights = -1.0  # the step the weights below are for: a uniform log computes them once, not per sample
     a_e = c_e = a_r = c_r = a_2 = c_2 = 0.0
@@ -108,6 +113,7 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
             state[7] = T
             state[8] = T
             state[9] = T
+            state[10] = T
         else:
             h = t - state[1]
             if h != h_weights:
@@ -119,6 +125,7 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
             state[3] = _hold(state[3], state[2], T, a_e, c_e)
             state[4] = _hold(state[4], state[2], T, a_r, c_r)
             state[5] = min(max(state[5], T - half_width), T + half_width)
+            state[10] = min(max(state[10], T - half_width2), T + half_width2)
             if series:
                 state[9] = _hold(state[9], previous_e, state[3], a_2, c_2)
             else:
@@ -134,6 +141,7 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
         else:
             out[i, 2] = (T - state[5]) / half_width
         out[i, 3] = state[9]
+        out[i, 4] = (T - state[10]) / half_width2 if half_width2 > 0.0 else 0.0
 
 
 def new_state() -> np.ndarray:
@@ -146,18 +154,19 @@ def evaluate(raw, time_s, coef, centre, half, lo, hi, power_on_s, tau_w, tau_w2,
     """The drift [deg/s] of each sample from :func:`advance`'s columns, in one pass (no temporaries).
 
     ``out = b0 + ((c3 z + c2) z + c1) z + g r + a |r| + h H + l (T_e2 - T_e) / half
-    + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2)``, ``z = (clip(T_e, lo, hi) - centre) / half``
+    + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2) + h2 H2``, ``z = (clip(T_e, lo, hi) - centre) / half``
     (``T_e`` the column `element` of `raw`: 3, the second stage, for two lags in series),
     ``r`` the causal dT/dt or, with ``rate_sat`` > 0, ``rate_sat tanh(dT/dt / rate_sat)``
     (:func:`gyrocomp.effects.shapes.saturating_rate`),
-    ``coef = (b0, c1, c2, c3, g, a, h, l, A, A2)`` (0 for an absent term; ``tau_w`` 0: no warm-up).
+    ``H2`` the second play's output,
+    ``coef = (b0, c1, c2, c3, g, a, h, l, A, A2, h2)`` (0 for an absent term; ``tau_w`` 0: no warm-up).
 
     Parameters
     ----------
-    raw : ndarray, shape (n, 4)
-        ``T_e``, dT/dt, hysteresis output, second ``T_e``.
+    raw : ndarray, shape (n, 5)
+        ``T_e``, dT/dt, hysteresis output, second ``T_e``, second play output.
     time_s : ndarray, shape (n,)
-    coef : ndarray, shape (10,)
+    coef : ndarray, shape (11,)
     centre, half, lo, hi : float
         The cubic's scaling and its clamp [degC] (-inf, inf: none).
     power_on_s, tau_w, tau_w2 : float
@@ -175,7 +184,7 @@ def evaluate(raw, time_s, coef, centre, half, lo, hi, power_on_s, tau_w, tau_w2,
         if rate_sat > 0.0:
             r = rate_sat * math.tanh(r / rate_sat)
         value = coef[0] + ((coef[3] * z + coef[2]) * z + coef[1]) * z + coef[4] * r + coef[5] * abs(r) + coef[6] * raw[i, 2]
-        value += coef[7] * (raw[i, 3] - te) / half
+        value += coef[7] * (raw[i, 3] - te) / half + coef[10] * raw[i, 4]
         if tau_w > 0.0:
             on = time_s[i] - power_on_s
             value += coef[8] * math.exp(-on / tau_w)

@@ -10,11 +10,11 @@ step: the temperature bridged linearly, as ``bridge_gaps`` does):
 * the play's centre ``p <- min(max(p, T - w/2), T + w/2)``, or the relay's
   branch ``br`` (0 until the first excursion of ``w``; then -1 once T falls
   ``w`` below its highest since the last switch, +1 once it rises ``w``
-  above its lowest);
+  above its lowest); a second play's centre ``p2`` as ``p``, of its own width;
 * a second element temperature ``T_e2`` as ``T_e``, a lag of T (in
   parallel) or of ``T_e`` (in series: the cubic is then of ``T_e2``);
 * ``drift = offset + sum_k c_k z^k + g dT/dt + a |dT/dt| + h play (or h br)
-  + l (T_e2 - T_e) / half_range + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2)``,
+  + h2 play2 + l (T_e2 - T_e) / half_range + A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2)``,
   ``z = (clamp(T_e) - centre) / half_range``, ``dT/dt = (T - T_f) / tau_r``,
   or ``s tanh((T - T_f) / (tau_r s))`` where the sensitivity saturates at ``s``.
 
@@ -71,18 +71,20 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         terms.append(f"({P}_real){_num(coef['relay'])} * s->br")
     elif spec["width_c"]:
         terms.append(f"({P}_real){_num(coef['play'])} * (t_c - s->p) / ({P}_real){_num(0.5 * spec['width_c'])}")
+    if spec["width_c"] and spec["width2_c"]:
+        terms.append(f"({P}_real){_num(coef['play2'])} * (t_c - s->p2) / ({P}_real){_num(0.5 * spec['width2_c'])}")
     series = bool(spec["tau_e_s"] and spec["tau_e2_s"] and spec["second_lag_path"] == "series")
     if spec["tau_e_s"] and spec["tau_e2_s"] and not series:
         terms.append(f"({P}_real){_num(coef['lag2'])} * (s->te2 - s->te) / ({P}_real){_num(e.half_range_c_)}")
     for key, tau in (("warmup", "tau_w_s"), ("warmup2", "tau_w2_s")):
         if spec["tau_w_s"] and spec[tau]:
             terms.append(f"({P}_real){_num(coef[key])} * exp(-(t - s->t_on) / ({P}_real){_num(spec[tau])})")
-    half = _num(0.5 * spec["width_c"])
+    half, half2 = _num(0.5 * spec["width_c"]), _num(0.5 * spec["width2_c"])
     lines = [
         f"/* {prefix}.h: causal grey-box gyro drift compensation, written by gyrocomp export --format c.",
         " * compensated = rate - drift(state, t, T); rate in deg/s, T in degC, t in s (any steps; a gap bridges T linearly).",
         f" * terms: element lag tau_e = {spec['tau_e_s']:.6g} s, dT/dt filter {tau_r:g} s, play width {spec['width_c']:.6g} degC,",
-        f" * hysteresis operator {spec['hysteresis_operator']}, second element lag {spec['tau_e2_s']:.6g} s ({spec['second_lag_path']}),",
+        f" * hysteresis operator {spec['hysteresis_operator']}, second play width {spec['width2_c']:.6g} degC, second element lag {spec['tau_e2_s']:.6g} s ({spec['second_lag_path']}),",
         f" * warm-up tau = {spec['tau_w_s']:.6g} s and {spec['tau_w2_s']:.6g} s, dT/dt saturation {spec['rate_saturation_c_per_s']:.6g} degC/s",
         " * (0: absent). Define GYROCOMP_REAL as float for single precision,",
         " * GYROCOMP_NO_CLAMP to extrapolate the cubic beyond the training range.",
@@ -97,11 +99,11 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         "",
         "typedef struct {",
         "    int started;",
-        f"    {P}_real t_prev, T_prev, te, tf, p, t_on, br, hi, lo, te2;",
+        f"    {P}_real t_prev, T_prev, te, tf, p, t_on, br, hi, lo, te2, p2;",
         f"}} {P}_state;",
         "",
         f"static void {P}_init({P}_state *s) {{",
-        "    s->started = 0; s->t_prev = s->T_prev = s->te = s->tf = s->p = s->t_on = s->br = s->hi = s->lo = s->te2 = 0;",
+        "    s->started = 0; s->t_prev = s->T_prev = s->te = s->tf = s->p = s->t_on = s->br = s->hi = s->lo = s->te2 = s->p2 = 0;",
         "}",
         "",
         f"static {P}_real {P}_hold({P}_real x, {P}_real prev, {P}_real cur, {P}_real h, {P}_real tau) {{",
@@ -116,13 +118,15 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         f"static {P}_real {P}_update({P}_state *s, {P}_real t, {P}_real t_c, {P}_real rate) {{",
         f"    {P}_real r, z, te;",
         "    if (!s->started) {",
-        "        s->started = 1; s->te = s->tf = s->p = s->hi = s->lo = s->te2 = t_c; s->br = 0; s->t_on = t;",
+        "        s->started = 1; s->te = s->tf = s->p = s->hi = s->lo = s->te2 = s->p2 = t_c; s->br = 0; s->t_on = t;",
         "    } else {",
         f"        const {P}_real h = t - s->t_prev, te_prev = s->te;",
         f"        s->te = {P}_hold(s->te, s->T_prev, t_c, h, ({P}_real){_num(spec['tau_e_s'])});",
         f"        s->tf = {P}_hold(s->tf, s->T_prev, t_c, h, ({P}_real){_num(tau_r)});",
         f"        if (s->p < t_c - ({P}_real){half}) s->p = t_c - ({P}_real){half};",
         f"        if (s->p > t_c + ({P}_real){half}) s->p = t_c + ({P}_real){half};",
+        f"        if (s->p2 < t_c - ({P}_real){half2}) s->p2 = t_c - ({P}_real){half2};",
+        f"        if (s->p2 > t_c + ({P}_real){half2}) s->p2 = t_c + ({P}_real){half2};",
         f"        s->te2 = {P}_hold(s->te2, {'te_prev, s->te' if series else 's->T_prev, t_c'}, h, ({P}_real){_num(spec['tau_e2_s'])});",
         *([] if series else ["        (void)te_prev;"]),
         "    }",

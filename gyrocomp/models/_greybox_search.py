@@ -91,7 +91,7 @@ class Prepared:
         from gyrocomp.effects._stateful import new_state
 
         state = new_state()
-        out = np.empty((self.time_s.size, 4))
+        out = np.empty((self.time_s.size, 5))
         for s in self.segments:
             if not bridge:
                 state[:] = 0.0
@@ -129,6 +129,7 @@ class Search:
         self.bases = [NoiseBasis(r.n_blocks, r.block_s, r.starts) for r in runs]
         self.n_blocks = sum(r.n_blocks for r in runs)
         self._raw = {}
+        self._whiteners = ((), [])  # the last noise levels' factorisations: the trials of a round share them
 
     # design ---------------------------------------------------------------
     def design(self, spec: Spec) -> tuple[list, list, list]:
@@ -141,7 +142,9 @@ class Search:
             cols = columns_of(self._raw_of(i, spec), run.time_s, spec, power_on, m.centre_c_, m.half_range_c_, m.degree)
             per_run = {f"offset_{j}": np.full(run.time_s.size, float(j == i)) for j in range(n_runs)}
             if spec.width:
-                unknown = (self._raw_of(i, spec)[:, 2] == 0.0).astype(float) if spec.relay else run.power_on_column(spec.width)
+                unknown = run.power_on_column(max(spec.width, spec.width2) if not spec.relay else spec.width2)
+                if spec.relay:
+                    unknown = np.maximum(unknown, self._raw_of(i, spec)[:, 2] == 0.0)
                 per_run |= {f"power_on_{j}": unknown * (j == i) for j in range(n_runs)}
             columns = per_run | cols
             names = list(columns)
@@ -158,10 +161,12 @@ class Search:
         """-2 log L with beta at its GLS estimate, the runs independent (block-diagonal covariance)."""
         from gyrocomp.effects.likelihood import NoiseModel
 
-        model = NoiseModel(*noise)
+        noise = tuple(noise)
+        if self._whiteners[0] != noise:
+            model = NoiseModel(*noise)
+            self._whiteners = (noise, [basis.whitener(model) for basis in self.bases])
         yw, Xw, logdet = [], [], 0.0
-        for run, basis, X in zip(self.runs, self.bases, blocks):
-            w = basis.whitener(model)
+        for run, w, X in zip(self.runs, self._whiteners[1], blocks):
             yw.append(w.whiten(run.y))
             Xw.append(w.whiten(X))
             logdet += w.logdet
@@ -208,10 +213,11 @@ class Search:
         replaces T by T_e in the cubic, the difference ``T_e - T``; for the
         saturation, which replaces dT/dt by ``s tanh(dT/dt / s)``, their difference.
         """
-        if term == "hysteresis" and not any(_reverses(r.temperature_c, trial.width) for r in self.runs):
+        width = {"hysteresis": trial.width, "second_hysteresis": trial.width2}.get(term)
+        if width is not None and not any(_reverses(r.temperature_c, width) for r in self.runs):
             return Refusal(
                 term, 0.0,
-                f"hysteresis not fitted: the temperature never reverses by more than {trial.width:.3g} degC after its first excursion "
+                f"{term} not fitted: the temperature never reverses by more than {width:.3g} degC after its first excursion "
                 "on the training runs, so the branch never changes and the play is a function of T alone; add a run that heats and cools",
             )
         base = self._stacked(spec)
@@ -231,18 +237,21 @@ class Search:
         return next((r for r in refused if r.term in added), None)
 
     def _raw_of(self, i: int, spec: Spec) -> np.ndarray:
-        key = (i, spec.tau_e, spec.width, spec.tau_r, spec.relay, spec.tau_e2, spec.series)
+        key = (i, spec.tau_e, spec.width, spec.tau_r, spec.relay, spec.tau_e2, spec.series, spec.width2)
         if key not in self._raw:
-            states = Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r, spec.relay, spec.tau_e2, series=spec.series)
+            states = Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r, spec.relay, spec.tau_e2, series=spec.series, width2=spec.width2)
             self._raw[key] = self.runs[i].raw(states, self.model.bridge_gaps)
         return self._raw[key]
 
     # search -------------------------------------------------------------------
     def grids(self, spec: Spec) -> dict:
         """Each term's candidate changes to `spec`. Two lags in series are searched about the lag `spec` holds: a single
-        lag's time constant is their sum (the mean delay), so the grid is of the first stage's share of it."""
+        lag's time constant is their sum (the mean delay), so the grid is of the first stage's share of it. A second play
+        beside a play: both widths anew (:func:`_pairs`); beside a relay, which gains only at its own width, the play's alone."""
         m = self.model
         series = [{"tau_e": f * spec.tau_e, "tau_e2": (1 - f) * spec.tau_e, "series": True} for f in SERIES_SHARES] if spec.tau_e else []
+        widths = np.asarray(sorted(m.widths_c))
+        plays = [{"width2": float(v)} for v in widths] if spec.relay else _pairs("width", "width2", widths)
         return {
             "thermal_lag": [{"tau_e": float(v)} for v in np.geomspace(*m.lag_tau_s, m.grid_points)],
             "temp_rate": [{"rate_form": form, "tau_r": float(v)} for form in (1, 2) for v in np.geomspace(*m.rate_tau_s, RATE_GRID_POINTS)],
@@ -251,6 +260,7 @@ class Search:
             "second_lag": _pairs("tau_e", "tau_e2", np.geomspace(*m.lag_tau_s, m.grid_points)) + series,
             "second_warmup": _pairs("tau_w", "tau_w2", np.geomspace(*m.warmup_tau_s, m.grid_points)),
             "rate_saturation": [{"rate_sat": float(v)} for v in np.geomspace(*m.rate_saturation_c_per_s, SATURATION_GRID_POINTS)],
+            "second_hysteresis": plays,
         }
 
     def run(self) -> tuple[Spec, list, list]:
@@ -340,15 +350,16 @@ class Search:
             "tau_r": (self.model.rate_tau_s[1] / self.model.rate_tau_s[0]) ** (1 / (RATE_GRID_POINTS - 1)),
             "rate_sat": (self.model.rate_saturation_c_per_s[1] / self.model.rate_saturation_c_per_s[0]) ** (1 / (SATURATION_GRID_POINTS - 1)),
         }
-        spacing |= {"tau_e2": spacing["tau_e"], "tau_w2": spacing["tau_w"]}
+        spacing |= {"tau_e2": spacing["tau_e"], "tau_w2": spacing["tau_w"], "width2": spacing["width"]}
         terms = {"tau_e": "thermal_lag", "tau_w": "warmup", "width": "hysteresis", "tau_r": "temp_rate", "tau_e2": "second_lag", "tau_w2": "second_warmup",
-                 "rate_sat": "rate_saturation"}
+                 "rate_sat": "rate_saturation", "width2": "second_hysteresis"}
         m = self.model
         ranges = {"tau_e": m.lag_tau_s, "tau_w": m.warmup_tau_s, "width": (min(m.widths_c), max(m.widths_c)), "tau_r": m.rate_tau_s,
                   "tau_e2": m.lag_tau_s, "tau_w2": m.warmup_tau_s, "rate_sat": m.rate_saturation_c_per_s}
-        without = {"tau_e": {"tau_e": 0.0, "tau_e2": 0.0, "series": False}, "tau_w": {"tau_w": 0.0, "tau_w2": 0.0}, "width": {"width": 0.0},
+        ranges["width2"] = ranges["width"]
+        without = {"tau_e": {"tau_e": 0.0, "tau_e2": 0.0, "series": False}, "tau_w": {"tau_w": 0.0, "tau_w2": 0.0}, "width": {"width": 0.0, "width2": 0.0},
                    "tau_r": {"rate_form": 0, "tau_r": 0.0, "rate_sat": 0.0}, "tau_e2": {"tau_e2": 0.0, "series": False}, "tau_w2": {"tau_w2": 0.0},
-                   "rate_sat": {"rate_sat": 0.0}}
+                   "rate_sat": {"rate_sat": 0.0}, "width2": {"width2": 0.0}}
         for _ in range(2):
             for key, factor in spacing.items():
                 value = getattr(spec, key)
@@ -396,7 +407,7 @@ class Search:
 
 
 def _pairs(first: str, second: str, grid: np.ndarray) -> list:
-    """Both time constants anew, the second the longer, on every other point of `grid`: a second time constant
+    """Both time constants (or widths) anew, the second the longer, on every other point of `grid`: a second one
     beside the first one held where one alone fitted best would settle at a local optimum (a mixture of the two)."""
     coarse = grid[::2]
     return [{first: float(a), second: float(b)} for i, a in enumerate(coarse) for b in coarse[i + 1 :]]
@@ -411,6 +422,7 @@ def _params(spec: Spec, term: str) -> dict:
         "second_lag": {"tau_s": spec.tau_e2, "path": "series" if spec.series else "parallel"},
         "second_warmup": {"tau_s": spec.tau_w2},
         "rate_saturation": {"saturation_c_per_s": spec.rate_sat},
+        "second_hysteresis": {"width_c": spec.width2, "operator": "play"},
     }[term]
 
 

@@ -16,12 +16,12 @@ import numpy as np
 
 __all__ = ["TERMS", "JOINS", "Spec", "kernel", "columns_of", "element_column"]
 
-TERMS = ("thermal_lag", "temp_rate", "hysteresis", "warmup", "second_lag", "second_warmup", "rate_saturation")
+TERMS = ("thermal_lag", "temp_rate", "hysteresis", "warmup", "second_lag", "second_warmup", "rate_saturation", "second_hysteresis")
 """The model's optional terms, in the order they are judged: the vocabulary's names, then a second time constant
-of the element lag and of the warm-up and a saturation of the dT/dt sensitivity, each tried only once the term
-it joins is in."""
+of the element lag and of the warm-up, a saturation of the dT/dt sensitivity and a second play of another width,
+each tried only once the term it joins is in."""
 
-JOINS = {"second_lag": "thermal_lag", "second_warmup": "warmup", "rate_saturation": "temp_rate"}
+JOINS = {"second_lag": "thermal_lag", "second_warmup": "warmup", "rate_saturation": "temp_rate", "second_hysteresis": "hysteresis"}
 """Each term that refines another and the term it joins: it is tried only once that term is in."""
 
 
@@ -39,9 +39,11 @@ class Spec:
     tau_w2: float = 0.0  # a second warm-up time constant (with tau_w)
     rate_sat: float = 0.0  # the dT/dt sensitivity saturates: s tanh(dT/dt / s), s in degC/s (with rate_form)
     series: bool = False  # the second element lag is in series with the first (the cubic at its output), not in parallel
+    width2: float = 0.0  # a second play's width, degC (with width): a spread of widths, Prandtl-Ishlinskii's sum of plays
 
     def terms(self) -> list[str]:
-        present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0, self.tau_e2 > 0, self.tau_w2 > 0, self.rate_sat > 0)
+        present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0, self.tau_e2 > 0, self.tau_w2 > 0, self.rate_sat > 0,
+                   self.width2 > 0)
         return [t for t, on in zip(TERMS, present) if on]
 
     def n_nonlinear(self) -> int:
@@ -50,12 +52,13 @@ class Spec:
 
 
 def kernel(time_s, temperature_c, state, spec: Spec) -> np.ndarray:
-    """(T_e, dT/dt, hysteresis output, second T_e) of each sample; without a dT/dt term the filter runs at 1 s, unused."""
+    """(T_e, dT/dt, hysteresis output, second T_e, second play output) of each sample; without a dT/dt term the filter
+    runs at 1 s, unused."""
     from gyrocomp.effects._stateful import advance
 
-    out = np.empty((time_s.size, 4))
+    out = np.empty((time_s.size, 5))
     advance(time_s, temperature_c, state, float(spec.tau_e), float(spec.tau_r or 1.0), 0.5 * float(spec.width), bool(spec.relay),
-            float(spec.tau_e2), bool(spec.series), out)
+            float(spec.tau_e2), bool(spec.series), 0.5 * float(spec.width2), out)
     return out
 
 
@@ -70,7 +73,7 @@ def columns_of(raw, time_s, spec: Spec, power_on_s, centre, half, degree) -> dic
     ``z1..z3`` (powers of the scaled element temperature), ``rate`` and
     ``rate_abs`` (dT/dt, or its saturation
     :func:`~gyrocomp.effects.shapes.saturating_rate`; heating and cooling apart), ``play`` or ``relay``
-    (the hysteresis operator's output), ``warmup`` and ``warmup2``
+    (the hysteresis operator's output), ``play2`` (a second play's), ``warmup`` and ``warmup2``
     (``exp(-t_on / tau)``) and ``lag2`` (the second element temperature
     less the first, scaled as z: the second path's share of the drift).
     Two lags in series have no ``lag2``: the powers are of the second
@@ -87,6 +90,8 @@ def columns_of(raw, time_s, spec: Spec, power_on_s, centre, half, degree) -> dic
             columns["rate_abs"] = np.abs(rate)
     if spec.width:
         columns["relay" if spec.relay else "play"] = raw[:, 2]
+    if spec.width and spec.width2:
+        columns["play2"] = raw[:, 4]
     if spec.tau_w:
         columns["warmup"] = np.exp(-(time_s - power_on_s) / spec.tau_w)
     if spec.tau_w and spec.tau_w2:

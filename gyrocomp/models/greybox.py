@@ -23,7 +23,11 @@ the effect shapes of the vocabulary (:mod:`gyrocomp.effects.vocabulary`):
   (:func:`gyrocomp.effects.shapes.saturating_rate`, ``s`` fitted within
   ``rate_saturation_c_per_s``);
 * ``hysteresis``: a play operator of width ``w`` (its output ``P_w`` in
-  [-1, 1], :func:`gyrocomp.effects.shapes.hysteresis_play`) with its branch state;
+  [-1, 1], :func:`gyrocomp.effects.shapes.hysteresis_play`) with its branch state,
+  or a direction relay; where it pays, a second play of another width
+  (``second_hysteresis``): two terms of a Prandtl-Ishlinskii sum of plays,
+  for a part whose hysteresis is spread over several widths (a Preisach
+  distribution of switching temperatures);
 * ``warmup``: ``A exp(-t_on / tau_w)``, ``t_on`` the time since power-on
   (the recording's first sample unless told otherwise).
 
@@ -65,7 +69,7 @@ from gyrocomp.models._greybox_state import JOINS, TERMS, Spec, element_column, k
 
 __all__ = ["GreyBoxDrift", "GreyBoxStream", "TrainingRun", "TERMS"]
 
-VERSION = 3
+VERSION = 4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -134,11 +138,11 @@ class GreyBoxDrift(Params):
     spec_ : dict
         ``tau_e_s``, ``rate_form`` (0, 1, 2), ``width_c``, ``tau_w_s``,
         ``rate_tau_s``, ``hysteresis_operator``, ``tau_e2_s``, ``tau_w2_s``,
-        ``rate_saturation_c_per_s`` (0: a term absent), ``second_lag_path``
-        (``parallel`` or ``series``).
+        ``rate_saturation_c_per_s``, ``width2_c`` (0: a term absent),
+        ``second_lag_path`` (``parallel`` or ``series``).
     coef_ : dict of str to float
         Column coefficients [deg/s per column unit]: ``z1..z3``, ``rate``,
-        ``rate_abs``, ``play``, ``warmup``.
+        ``rate_abs``, ``play`` or ``relay``, ``play2``, ``warmup``, ``warmup2``, ``lag2``.
     offset_ : float
         Offset applied in compensation (mean of the runs' offsets) [deg/s].
     run_offsets_ : list of float
@@ -245,7 +249,8 @@ class GreyBoxDrift(Params):
             beta, names, noise = search.final(spec)
         self.spec_ = {"tau_e_s": spec.tau_e, "rate_form": spec.rate_form, "width_c": spec.width, "tau_w_s": spec.tau_w, "rate_tau_s": spec.tau_r,
                       "hysteresis_operator": "relay" if spec.relay else "play", "tau_e2_s": spec.tau_e2, "tau_w2_s": spec.tau_w2,
-                      "rate_saturation_c_per_s": spec.rate_sat, "second_lag_path": "series" if spec.series else "parallel"}
+                      "rate_saturation_c_per_s": spec.rate_sat, "second_lag_path": "series" if spec.series else "parallel",
+                      "width2_c": spec.width2}
         n_runs = len(prepared)
         self.run_offsets_ = [float(b) for b in beta[:n_runs]]
         weights = np.array([p.duration_s for p in prepared])
@@ -343,7 +348,7 @@ class GreyBoxDrift(Params):
                    *self.temperature_range_c_, *self.rate_range_c_per_s_]
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in numbers):
             raise InputError(f"{name}: greybox model holds a non-finite or non-numeric parameter")
-        known = {f"z{k}" for k in range(1, self.degree + 1)} | {"rate", "rate_abs", "play", "relay", "warmup", "warmup2", "lag2"}
+        known = {f"z{k}" for k in range(1, self.degree + 1)} | {"rate", "rate_abs", "play", "relay", "play2", "warmup", "warmup2", "lag2"}
         bad = sorted(set(self.coef_) - known)
         if bad:
             raise InputError(f"{name}: greybox coefficient(s) {', '.join(bad)} unknown; known: {', '.join(sorted(known))}")
@@ -360,12 +365,13 @@ class GreyBoxDrift(Params):
         """The fitted nonlinear specification (:class:`~gyrocomp.models._greybox_state.Spec`)."""
         s = self.spec_
         return Spec(s["tau_e_s"], s["rate_form"], s["width_c"], s["tau_w_s"], s["rate_tau_s"], s["hysteresis_operator"] == "relay",
-                    s["tau_e2_s"], s["tau_w2_s"], s["rate_saturation_c_per_s"], s["second_lag_path"] == "series")
+                    s["tau_e2_s"], s["tau_w2_s"], s["rate_saturation_c_per_s"], s["second_lag_path"] == "series", s["width2_c"])
 
 
-_ADDED_SPEC = {"hysteresis_operator": "play", "tau_e2_s": 0.0, "tau_w2_s": 0.0, "rate_saturation_c_per_s": 0.0, "second_lag_path": "parallel"}
-"""The spec entries versions 2 (the relay, the second time constants) and 3 (the saturation, lags in series) added,
-at the values an older model holds."""
+_ADDED_SPEC = {"hysteresis_operator": "play", "tau_e2_s": 0.0, "tau_w2_s": 0.0, "rate_saturation_c_per_s": 0.0, "second_lag_path": "parallel",
+               "width2_c": 0.0}
+"""The spec entries versions 2 (the relay, the second time constants), 3 (the saturation, lags in series) and 4
+(a second play) added, at the values an older model holds."""
 
 
 _CHOICES = {"hysteresis_operator": ("play", "relay"), "second_lag_path": ("parallel", "series")}
@@ -393,7 +399,7 @@ class GreyBoxStream:
         c = model.coef_
         hysteresis = c.get("relay" if model.spec_["hysteresis_operator"] == "relay" else "play", 0.0)
         self.coef = np.array([model.offset_, *(c.get(f"z{k}", 0.0) for k in (1, 2, 3)), c.get("rate", 0.0), c.get("rate_abs", 0.0),
-                              hysteresis, c.get("lag2", 0.0), c.get("warmup", 0.0), c.get("warmup2", 0.0)])
+                              hysteresis, c.get("lag2", 0.0), c.get("warmup", 0.0), c.get("warmup2", 0.0), c.get("play2", 0.0)])
 
     def restart_if_not_bridged(self) -> None:
         """Before a segment after a gap: a cold element, filter and play unless the model bridges gaps."""

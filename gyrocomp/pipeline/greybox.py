@@ -83,8 +83,8 @@ def train_greybox(runs: list, config: dict, *, source: str, seed: int | None = 0
             "parallel": False,
             "starts_at_power_on": power_on,
             "formula": (
-                "drift = offset + sum_k c_k z^k + g dT/dt + a |dT/dt| + h H_w(T) + l (T_e2 - T_e) / half_range "
-                "+ A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2), H_w a play or a relay of width w, "
+                "drift = offset + sum_k c_k z^k + g dT/dt + a |dT/dt| + h H_w(T) + h2 P_w2(T) + l (T_e2 - T_e) / half_range "
+                "+ A exp(-t_on / tau_w) + A2 exp(-t_on / tau_w2), H_w a play or a relay of width w, P_w2 a second play, "
                 "z = (T_e - centre) / half_range, tau_e dT_e/dt = T - T_e, dT/dt = (T - T_f) / tau_r (causal, tau_r fitted; "
                 "s tanh(dT/dt / s) in its place where it saturates), "
                 "states carried sample by sample (gyrocomp.effects._stateful)"

@@ -61,7 +61,7 @@ def _relay(T, width, start=1.0):
 
 
 def _gyro(t, T, seed, *, tau_e=400.0, rate=1.5, asym=0.5, play=0.01, width=4.0, warm=0.03, tau_w=900.0, rrw=2e-6,
-          relay=0.0, lag2=0.0, tau_e2=3000.0, warm2=0.0, tau_w2=4000.0, sat=0.0, series=False):
+          relay=0.0, lag2=0.0, tau_e2=3000.0, warm2=0.0, tau_w2=4000.0, sat=0.0, series=False, play2=0.0, width2=12.0):
     rng = np.random.default_rng(seed)
     Te = _lag(t, T, tau_e)
     if series:  # the die behind a second stage: the cubic of the lag of T_e
@@ -72,11 +72,13 @@ def _gyro(t, T, seed, *, tau_e=400.0, rate=1.5, asym=0.5, play=0.01, width=4.0, 
     if sat:  # a sensitivity that saturates at `sat` degC/s
         r = sat * np.tanh(r / sat)
     bias += rate * r + asym * np.abs(r)
-    p, out = T[0], np.empty_like(T)
-    for i in range(T.size):
-        p = min(max(p, T[i] - width / 2), T[i] + width / 2)
-        out[i] = (T[i] - p) / (width / 2)
-    bias += play * out + warm * np.exp(-(t - t[0]) / tau_w) + warm2 * np.exp(-(t - t[0]) / tau_w2)
+    for amplitude, w in ((play, width), (play2, width2)):
+        p, out = T[0], np.empty_like(T)
+        for i in range(T.size):
+            p = min(max(p, T[i] - w / 2), T[i] + w / 2)
+            out[i] = (T[i] - p) / (w / 2)
+        bias += amplitude * out
+    bias += warm * np.exp(-(t - t[0]) / tau_w) + warm2 * np.exp(-(t - t[0]) / tau_w2)
     bias += relay * _relay(T, width) + (lag2 * (_lag(t, T, tau_e2) - 25.0) if lag2 else 0.0)
     noise = 0.003 * rng.normal(size=t.size) + np.cumsum(rrw * rng.normal(size=t.size))
     return bias + noise, bias
@@ -131,13 +133,15 @@ SECOND = {  # the forms a single term cannot hold, each with its own term beside
                     {"spec:tau_e_s": 300.0, "spec:tau_e2_s": 1500.0}),
     "rate_saturation": (dict(tau_e=0.0, asym=0.0, play=0.0, warm=0.0, sat=0.005), ("temp_rate", "rate_saturation"),
                         {"spec:rate_saturation_c_per_s": 0.005, "coef:rate": 1.5}),
+    "two_plays": (dict(tau_e=0.0, rate=0.0, asym=0.0, warm=0.0, play2=0.015), ("hysteresis", "second_hysteresis"),
+                  {"spec:width_c": 4.0, "coef:play": 0.01, "spec:width2_c": 12.0, "coef:play2": 0.015}),
 }
 
 
 @pytest.mark.parametrize("form", list(SECOND))
 def test_a_relay_and_second_time_constants_are_selected_and_recovered_within_10_percent(form):
     """A direction relay (the two-branch hysteresis), two parallel heat paths, a two-exponential warm-up, a dT/dt
-    sensitivity that saturates at 0.3 degC/min (the cycle ramps at up to 0.67)."""
+    sensitivity that saturates at 0.3 degC/min (the cycle ramps at up to 0.67), plays of 4 and 12 degC."""
     t = np.arange(0, 21600.0)
     T = _chamber(t, *CYCLE)
     changes, terms, truth = SECOND[form]
@@ -163,13 +167,23 @@ def test_a_relay_and_second_time_constants_are_selected_and_recovered_within_10_
         assert (m.spec_ if where == "spec" else m.coef_)[name] == pytest.approx(value, rel=0.1), key
 
 
-def test_a_linear_dtdt_sensitivity_is_not_saturated():
+PLAIN = {  # one form of a term and the refinement it must not get: the zeroed effects, the refinement's entry, the truth
+    "linear_dtdt": (dict(tau_e=0.0, asym=0.0, play=0.0, warm=0.0), ("temp_rate", "rate_saturation"), "rate_saturation_c_per_s", {"coef:rate": 1.5}),
+    "single_play": (dict(tau_e=0.0, rate=0.0, asym=0.0, warm=0.0), ("hysteresis", "second_hysteresis"), "width2_c", {"spec:width_c": 4.0}),
+}
+
+
+@pytest.mark.parametrize("form", list(PLAIN))
+def test_a_linear_dtdt_is_not_saturated_and_a_single_play_gets_no_second(form):
     t = np.arange(0, 21600.0)
     T = _chamber(t, *CYCLE)
-    y, _ = _gyro(t, T, 2, tau_e=0.0, asym=0.0, play=0.0, warm=0.0)
-    m = GreyBoxDrift(grid_points=12, terms=("temp_rate", "rate_saturation")).fit([_run(t, T, y)])
-    assert [s["term"] for s in m.selection_] == ["temp_rate"] and m.spec_["rate_saturation_c_per_s"] == 0.0
-    assert m.coef_["rate"] == pytest.approx(1.5, rel=0.1)
+    zeroed, terms, refinement, truth = PLAIN[form]
+    y, _ = _gyro(t, T, 2, **zeroed)
+    m = GreyBoxDrift(grid_points=12, terms=terms).fit([_run(t, T, y)])
+    assert [s["term"] for s in m.selection_] == [terms[0]] and m.spec_[refinement] == 0.0
+    for key, value in truth.items():
+        where, name = key.split(":")
+        assert (m.spec_ if where == "spec" else m.coef_)[name] == pytest.approx(value, rel=0.1), key
 
 
 def test_a_second_time_constant_is_not_fitted_where_its_first_cannot_be():
@@ -239,9 +253,10 @@ def test_dtdt_in_a_single_warmup_is_refused_with_its_reason():
 def test_a_hysteresis_whose_branch_never_changes_is_refused():
     t, T, y = _warmup_run()
     play = (T - np.maximum(T[0], T - 1.0)) / 1.0  # a 2 degC play on a monotonic heat-up
-    m = GreyBoxDrift(grid_points=8, terms=("hysteresis",)).fit([_run(t, T, y + 0.02 * play)])
-    (refusal,) = m.not_fitted_
+    m = GreyBoxDrift(grid_points=8, terms=("hysteresis", "second_hysteresis")).fit([_run(t, T, y + 0.02 * play)])
+    refusal, second = m.not_fitted_
     assert m.spec_["width_c"] == 0 and "never reverses by more than 0.5 degC" in refusal["reason"]
+    assert m.spec_["width2_c"] == 0 and second["reason"].startswith("second_hysteresis not fitted: hysteresis is not (the temperature never reverses")
 
 
 def test_a_warmup_is_refused_on_a_log_that_does_not_start_at_power_on():
@@ -266,8 +281,8 @@ def test_the_stateful_kernel_equals_the_registry_shapes_and_chunks_give_the_same
     t = np.arange(0.0, 3000.0)
     T = _chamber(t, [0, 500, 1500, 2000, 3000], [20, 30, 22, 28, 21], tau_s=60.0)
     for relay, operator, series in ((False, shapes.hysteresis_play, False), (True, shapes.hysteresis_branch, True)):
-        out = np.empty((t.size, 4))
-        advance(t, T, new_state(), 120.0, 30.0, 1.5, relay, 700.0, series, out)
+        out = np.empty((t.size, 5))
+        advance(t, T, new_state(), 120.0, 30.0, 1.5, relay, 700.0, series, 0.8, out)
         te = shapes.element_temperature(t, T, 120.0)
         np.testing.assert_allclose(out[:, 0], te, rtol=0, atol=1e-10)
         np.testing.assert_allclose(out[:, 3], shapes.element_temperature(t, te if series else T, 700.0), rtol=0, atol=1e-10)
@@ -275,9 +290,11 @@ def test_the_stateful_kernel_equals_the_registry_shapes_and_chunks_give_the_same
         first = shapes.first_excursion(T, 3.0)  # the relay's branch is unknown (0) before it; the play starts centred
         np.testing.assert_allclose(out[first:, 2], operator(t, T, 3.0)[first:], rtol=0, atol=1e-12)
         assert not relay or (np.all(out[:first, 2] == 0.0) and first > 0)
+        second = shapes.first_excursion(T, 1.6)  # the second play, 1.6 degC wide
+        np.testing.assert_allclose(out[second:, 4], shapes.hysteresis_play(t, T, 1.6)[second:], rtol=0, atol=1e-12)
         state, chunks = new_state(), np.empty_like(out)
         for lo in range(0, t.size, 777):
-            advance(t[lo : lo + 777], T[lo : lo + 777], state, 120.0, 30.0, 1.5, relay, 700.0, series, chunks[lo : lo + 777])
+            advance(t[lo : lo + 777], T[lo : lo + 777], state, 120.0, 30.0, 1.5, relay, 700.0, series, 0.8, chunks[lo : lo + 777])
         assert np.array_equal(chunks, out)
 
 
@@ -360,13 +377,13 @@ int main(void) {
 
 
 def _relay_and_second_time_constants(model, path="parallel"):
-    """The fitted cycle model with a relay for its play, a second lag and warm-up and a saturating dT/dt (C against
-    Python needs no fit)."""
+    """The fitted cycle model with a relay for its play, a second play, a second lag and warm-up and a saturating dT/dt
+    (C against Python needs no fit)."""
     d = json.loads(json.dumps(model.to_dict()))
     d["fitted"]["spec_"] |= {"hysteresis_operator": "relay", "tau_e2_s": 2500.0, "tau_w2_s": 3000.0, "rate_saturation_c_per_s": 0.004,
-                             "second_lag_path": path}
+                             "second_lag_path": path, "width2_c": 9.0}
     coef = d["fitted"]["coef_"]
-    coef |= {"relay": coef.pop("play"), "warmup2": 0.02} | ({"lag2": 0.05} if path == "parallel" else {})
+    coef |= {"relay": coef.pop("play"), "warmup2": 0.02, "play2": 0.004} | ({"lag2": 0.05} if path == "parallel" else {})
     return GreyBoxDrift.from_dict(d)
 
 
@@ -407,6 +424,7 @@ def test_c_header_compiles_strictly_and_reproduces_python(cycle_model, tmp_path,
         assert worst < bound, (real, worst)
     if variant != "fitted":
         assert "s->br" in header and "s->te2" in header and header.count("exp(-(t - s->t_on)") == 2 and "tanh(r / " in header
+        assert "(t_c - s->p2) / (gyrocomp_real)4.5" in header
         assert ("te = s->te2;" in header) == (variant == "series")
         return
     with pytest.raises(InputError, match=r"--static-part writes its cubic in T alone, which leaves 1 deg/h RMS"):
@@ -438,8 +456,10 @@ def test_train_names_every_selected_term_and_its_parameters_in_one_line():
     from gyrocomp.cli.train import greybox_line
 
     spec = {"tau_e_s": 297.0, "tau_e2_s": 1502.0, "second_lag_path": "series", "rate_form": 2, "rate_tau_s": 12.0,
-            "rate_saturation_c_per_s": 0.01, "width_c": 0.0, "tau_w_s": 900.0, "tau_w2_s": 4000.0}
+            "rate_saturation_c_per_s": 0.01, "width_c": 4.0, "hysteresis_operator": "relay", "width2_c": 12.0, "tau_w_s": 900.0,
+            "tau_w2_s": 4000.0}
     assert greybox_line({"spec_": spec}) == (
         "greybox: cubic in T_e + thermal_lag tau 297 s + second_lag tau 1502 s (series)"
-        " + temp_rate heating/cooling apart (filter 12 s, saturating at 0.6 degC/min) + warmup tau 900 s and 4000 s"
+        " + temp_rate heating/cooling apart (filter 12 s, saturating at 0.6 degC/min)"
+        " + hysteresis relay width 4 degC and play width 12 degC + warmup tau 900 s and 4000 s"
     )
