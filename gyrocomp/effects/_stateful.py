@@ -20,7 +20,8 @@ them:
   (:func:`gyrocomp.effects.shapes.hysteresis_play`); over a linear stretch the
   clamp at its end is exact, the input being monotone between samples; a
   second play of another width likewise (two plays: the first terms of a
-  Prandtl-Ishlinskii sum, a spread of widths);
+  Prandtl-Ishlinskii sum, a spread of widths); the hysteresis may switch on
+  ``T_e`` instead of T (the element's own temperature, at its samples);
 * or, in its place, a direction relay of width ``w``
   (:func:`gyrocomp.effects.shapes.hysteresis_branch`): +1 once the
   temperature has risen ``w`` above its lowest value since the last switch,
@@ -75,7 +76,7 @@ def _relay(state, T, width):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e2, series, half_width2, out):
+def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e2, series, half_width2, on_element, out):
     """Columns ``T_e``, ``dT/dt``, hysteresis output, second ``T_e``, second play output of each sample into `out` (n, 5);
     `state` updated in place.
 
@@ -97,6 +98,8 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
         The second element temperature lags ``T_e`` (in series), not T.
     half_width2 : float
         Half the width of a second play [degC] (0: none, output 0).
+    on_element : bool
+        The hysteresis (and the second play) switch on ``T_e``, not on T.
     out : ndarray, shape (n, 5)
     """
     h_weights = -1.0  # the step the weights below are for: a uniform log computes them once, not per sample
@@ -124,12 +127,13 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
             previous_e = state[3]
             state[3] = _hold(state[3], state[2], T, a_e, c_e)
             state[4] = _hold(state[4], state[2], T, a_r, c_r)
-            state[5] = min(max(state[5], T - half_width), T + half_width)
-            state[10] = min(max(state[10], T - half_width2), T + half_width2)
             if series:
                 state[9] = _hold(state[9], previous_e, state[3], a_2, c_2)
             else:
                 state[9] = _hold(state[9], state[2], T, a_2, c_2)
+        x = state[3] if on_element else T  # the hysteresis' input
+        state[5] = min(max(state[5], x - half_width), x + half_width)
+        state[10] = min(max(state[10], x - half_width2), x + half_width2)
         state[1] = t
         state[2] = T
         out[i, 0] = state[3]
@@ -137,11 +141,11 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
         if half_width <= 0.0:
             out[i, 2] = 0.0
         elif relay:
-            out[i, 2] = _relay(state, T, 2.0 * half_width)
+            out[i, 2] = _relay(state, x, 2.0 * half_width)
         else:
-            out[i, 2] = (T - state[5]) / half_width
+            out[i, 2] = (x - state[5]) / half_width
         out[i, 3] = state[9]
-        out[i, 4] = (T - state[10]) / half_width2 if half_width2 > 0.0 else 0.0
+        out[i, 4] = (x - state[10]) / half_width2 if half_width2 > 0.0 else 0.0
 
 
 def new_state() -> np.ndarray:

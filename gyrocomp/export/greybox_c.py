@@ -11,6 +11,7 @@ step: the temperature bridged linearly, as ``bridge_gaps`` does):
   branch ``br`` (0 until the first excursion of ``w``; then -1 once T falls
   ``w`` below its highest since the last switch, +1 once it rises ``w``
   above its lowest); a second play's centre ``p2`` as ``p``, of its own width;
+  these switch on ``T`` or, where the model says so, on ``T_e``;
 * a second element temperature ``T_e2`` as ``T_e``, a lag of T (in
   parallel) or of ``T_e`` (in series: the cubic is then of ``T_e2``);
 * ``drift = offset + sum_k c_k z^k + g dT/dt + a |dT/dt| + h play (or h br)
@@ -66,13 +67,14 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         terms.append(f"({P}_real){_num(coef['rate'])} * r")
         if spec["rate_form"] == 2:
             terms.append(f"({P}_real){_num(coef['rate_abs'])} * (r < 0 ? -r : r)")
+    x = "s->te" if spec["hysteresis_input"] == "element" and spec["tau_e_s"] else "t_c"  # the hysteresis' input
     relay = spec["width_c"] and spec["hysteresis_operator"] == "relay"
     if relay:
         terms.append(f"({P}_real){_num(coef['relay'])} * s->br")
     elif spec["width_c"]:
-        terms.append(f"({P}_real){_num(coef['play'])} * (t_c - s->p) / ({P}_real){_num(0.5 * spec['width_c'])}")
+        terms.append(f"({P}_real){_num(coef['play'])} * ({x} - s->p) / ({P}_real){_num(0.5 * spec['width_c'])}")
     if spec["width_c"] and spec["width2_c"]:
-        terms.append(f"({P}_real){_num(coef['play2'])} * (t_c - s->p2) / ({P}_real){_num(0.5 * spec['width2_c'])}")
+        terms.append(f"({P}_real){_num(coef['play2'])} * ({x} - s->p2) / ({P}_real){_num(0.5 * spec['width2_c'])}")
     series = bool(spec["tau_e_s"] and spec["tau_e2_s"] and spec["second_lag_path"] == "series")
     if spec["tau_e_s"] and spec["tau_e2_s"] and not series:
         terms.append(f"({P}_real){_num(coef['lag2'])} * (s->te2 - s->te) / ({P}_real){_num(e.half_range_c_)}")
@@ -84,7 +86,7 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         f"/* {prefix}.h: causal grey-box gyro drift compensation, written by gyrocomp export --format c.",
         " * compensated = rate - drift(state, t, T); rate in deg/s, T in degC, t in s (any steps; a gap bridges T linearly).",
         f" * terms: element lag tau_e = {spec['tau_e_s']:.6g} s, dT/dt filter {tau_r:g} s, play width {spec['width_c']:.6g} degC,",
-        f" * hysteresis operator {spec['hysteresis_operator']}, second play width {spec['width2_c']:.6g} degC, second element lag {spec['tau_e2_s']:.6g} s ({spec['second_lag_path']}),",
+        f" * hysteresis operator {spec['hysteresis_operator']} on the {spec['hysteresis_input']}, second play width {spec['width2_c']:.6g} degC, second element lag {spec['tau_e2_s']:.6g} s ({spec['second_lag_path']}),",
         f" * warm-up tau = {spec['tau_w_s']:.6g} s and {spec['tau_w2_s']:.6g} s, dT/dt saturation {spec['rate_saturation_c_per_s']:.6g} degC/s",
         " * (0: absent). Define GYROCOMP_REAL as float for single precision,",
         " * GYROCOMP_NO_CLAMP to extrapolate the cubic beyond the training range.",
@@ -123,17 +125,17 @@ def greybox_header(model, vectors: dict | None = None, *, prefix: str = "gyrocom
         f"        const {P}_real h = t - s->t_prev, te_prev = s->te;",
         f"        s->te = {P}_hold(s->te, s->T_prev, t_c, h, ({P}_real){_num(spec['tau_e_s'])});",
         f"        s->tf = {P}_hold(s->tf, s->T_prev, t_c, h, ({P}_real){_num(tau_r)});",
-        f"        if (s->p < t_c - ({P}_real){half}) s->p = t_c - ({P}_real){half};",
-        f"        if (s->p > t_c + ({P}_real){half}) s->p = t_c + ({P}_real){half};",
-        f"        if (s->p2 < t_c - ({P}_real){half2}) s->p2 = t_c - ({P}_real){half2};",
-        f"        if (s->p2 > t_c + ({P}_real){half2}) s->p2 = t_c + ({P}_real){half2};",
+        f"        if (s->p < {x} - ({P}_real){half}) s->p = {x} - ({P}_real){half};",
+        f"        if (s->p > {x} + ({P}_real){half}) s->p = {x} + ({P}_real){half};",
+        f"        if (s->p2 < {x} - ({P}_real){half2}) s->p2 = {x} - ({P}_real){half2};",
+        f"        if (s->p2 > {x} + ({P}_real){half2}) s->p2 = {x} + ({P}_real){half2};",
         f"        s->te2 = {P}_hold(s->te2, {'te_prev, s->te' if series else 's->T_prev, t_c'}, h, ({P}_real){_num(spec['tau_e2_s'])});",
         *([] if series else ["        (void)te_prev;"]),
         "    }",
-        f"    if (s->br >= 0 && s->hi - t_c > ({P}_real){_num(spec['width_c'])}) {{ s->br = -1; s->lo = t_c; }}",
-        f"    else if (s->br <= 0 && t_c - s->lo > ({P}_real){_num(spec['width_c'])}) {{ s->br = 1; s->hi = t_c; }}",
-        "    if (t_c > s->hi) s->hi = t_c;",
-        "    if (t_c < s->lo) s->lo = t_c;",
+        f"    if (s->br >= 0 && s->hi - {x} > ({P}_real){_num(spec['width_c'])}) {{ s->br = -1; s->lo = {x}; }}",
+        f"    else if (s->br <= 0 && {x} - s->lo > ({P}_real){_num(spec['width_c'])}) {{ s->br = 1; s->hi = {x}; }}",
+        f"    if ({x} > s->hi) s->hi = {x};",
+        f"    if ({x} < s->lo) s->lo = {x};",
         "    s->t_prev = t; s->T_prev = t_c;",
         f"    r = (t_c - s->tf) / ({P}_real){_num(tau_r)};",
         f"    te = s->{'te2' if series else 'te'};",

@@ -214,7 +214,8 @@ class Search:
         saturation, which replaces dT/dt by ``s tanh(dT/dt / s)``, their difference.
         """
         width = {"hysteresis": trial.width, "second_hysteresis": trial.width2}.get(term)
-        if width is not None and not any(_reverses(r.temperature_c, width) for r in self.runs):
+        inputs = [self._raw_of(i, trial)[:, 0] if trial.on_element and trial.tau_e else r.temperature_c for i, r in enumerate(self.runs)]
+        if width is not None and not any(_reverses(x, width) for x in inputs):
             return Refusal(
                 term, 0.0,
                 f"{term} not fitted: the temperature never reverses by more than {width:.3g} degC after its first excursion "
@@ -237,9 +238,10 @@ class Search:
         return next((r for r in refused if r.term in added), None)
 
     def _raw_of(self, i: int, spec: Spec) -> np.ndarray:
-        key = (i, spec.tau_e, spec.width, spec.tau_r, spec.relay, spec.tau_e2, spec.series, spec.width2)
+        key = (i, spec.tau_e, spec.width, spec.tau_r, spec.relay, spec.tau_e2, spec.series, spec.width2, spec.on_element)
         if key not in self._raw:
-            states = Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r, spec.relay, spec.tau_e2, series=spec.series, width2=spec.width2)
+            states = Spec(spec.tau_e, 1, spec.width, 0.0, spec.tau_r, spec.relay, spec.tau_e2, series=spec.series, width2=spec.width2,
+                          on_element=spec.on_element)
             self._raw[key] = self.runs[i].raw(states, self.model.bridge_gaps)
         return self._raw[key]
 
@@ -247,15 +249,19 @@ class Search:
     def grids(self, spec: Spec) -> dict:
         """Each term's candidate changes to `spec`. Two lags in series are searched about the lag `spec` holds: a single
         lag's time constant is their sum (the mean delay), so the grid is of the first stage's share of it. A second play
-        beside a play: both widths anew (:func:`_pairs`); beside a relay, which gains only at its own width, the play's alone."""
+        beside a play: both widths anew (:func:`_pairs`); beside a relay, which gains only at its own width, the play's alone.
+        With both a lag and a hysteresis, the hysteresis may switch on the measured T or on T_e: the hysteresis is tried
+        on either beside a lag, and the lag with the hysteresis on either."""
         m = self.model
         series = [{"tau_e": f * spec.tau_e, "tau_e2": (1 - f) * spec.tau_e, "series": True} for f in SERIES_SHARES] if spec.tau_e else []
         widths = np.asarray(sorted(m.widths_c))
+        inputs = (False, True) if spec.tau_e else (False,)
+        lag_inputs = (False, True) if spec.width else (False,)
         plays = [{"width2": float(v)} for v in widths] if spec.relay else _pairs("width", "width2", widths)
         return {
-            "thermal_lag": [{"tau_e": float(v)} for v in np.geomspace(*m.lag_tau_s, m.grid_points)],
+            "thermal_lag": [{"tau_e": float(v), "on_element": e} for e in lag_inputs for v in np.geomspace(*m.lag_tau_s, m.grid_points)],
             "temp_rate": [{"rate_form": form, "tau_r": float(v)} for form in (1, 2) for v in np.geomspace(*m.rate_tau_s, RATE_GRID_POINTS)],
-            "hysteresis": [{"width": float(v), "relay": relay} for relay in (False, True) for v in m.widths_c],
+            "hysteresis": [{"width": float(v), "relay": relay, "on_element": e} for e in inputs for relay in (False, True) for v in m.widths_c],
             "warmup": [{"tau_w": float(v)} for v in np.geomspace(*m.warmup_tau_s, m.grid_points)],
             "second_lag": _pairs("tau_e", "tau_e2", np.geomspace(*m.lag_tau_s, m.grid_points)) + series,
             "second_warmup": _pairs("tau_w", "tau_w2", np.geomspace(*m.warmup_tau_s, m.grid_points)),
@@ -325,6 +331,13 @@ class Search:
                 break
             steps.append({"term": term, "params": _params(trial, term), "delta_bic": float(t_score - score)})
             spec, noise, score, blocks, names = trial, t_noise, t_score, t_blocks, t_names
+            if term == "thermal_lag" and spec.width:  # the hysteresis may now switch on T_e: its width and form anew
+                moved = self.replace(spec, "hysteresis", noise)
+                if moved != spec:
+                    spec = self.refine(moved, noise)
+                    blocks, _, names = self.design(spec)
+                    noise, deviance, _ = self.fit_noise(blocks, noise)
+                    score = self.bic(deviance, self.n_params(spec, names, 3))
             if term != "temp_rate" or spec.rate_form == 2:
                 remaining.remove(term)
         spec = self.refine(spec, noise)
@@ -333,6 +346,20 @@ class Search:
         for step in steps:
             step["params"] = _params(spec, step["term"])
         return spec, steps, [{"term": t, "reason": not_fitted[t]} for t in m.terms if t in not_fitted]
+
+    def replace(self, spec: Spec, term: str, noise) -> Spec:
+        """`spec` with the parameters of `term`, already in, at the best point of its grid beside the others (lowest
+        deviance, the number of parameters unchanged), or `spec` itself when none is better."""
+        base = dataclasses.replace(spec, width=0.0, width2=0.0) if term == "hysteresis" else spec
+        best, best_deviance = spec, self.deviance(self.design(spec)[0], noise)[0]
+        for change in self.grids(spec)[term]:
+            trial = dataclasses.replace(spec, **change)
+            if self.identified(base, trial, term) is not None:
+                continue
+            deviance = self.deviance(self.design(trial)[0], noise)[0]
+            if deviance < best_deviance:
+                best, best_deviance = trial, deviance
+        return best
 
     def refine(self, spec: Spec, noise) -> Spec:
         """Each selected nonlinear parameter off its grid: two rounds of a bounded search of the deviance in its logarithm.
@@ -379,24 +406,34 @@ class Search:
                 base = dataclasses.replace(spec, **without[key])
                 if result.fun < deviance(math.log(value)) and self.identified(base, trial, terms[key]) is None:
                     spec = trial
-        return self._series_ridge(spec, noise)
+        if spec.series and spec.tau_e and spec.tau_e2:
+            spec = self._ridge(spec, noise, ("tau_e", "tau_e2"), "second_lag", {"tau_e2": 0.0, "series": False})
+        if spec.on_element and spec.tau_e and spec.width:
+            spec = self._ridge(spec, noise, ("tau_e", "width"), "hysteresis", {"width": 0.0, "width2": 0.0})
+        return spec
 
-    def _series_ridge(self, spec: Spec, noise) -> Spec:
-        """Two lags in series, jointly (Nelder-Mead in their logarithms): their deviance has a narrow ridge along a
-        constant sum, which a search of one time constant at a time climbs only in small steps."""
-        if not (spec.series and spec.tau_e and spec.tau_e2):
-            return spec
-        lo, hi = (math.log(v) for v in self.model.lag_tau_s)
+    def _ridge(self, spec: Spec, noise, keys: tuple, term: str, without: dict) -> Spec:
+        """Two parameters jointly (Nelder-Mead in their logarithms), where their deviance has a narrow ridge that a search
+        of one at a time climbs only in small steps: two lags in series (along a constant sum), and a lag and the width
+        of a hysteresis switching on ``T_e`` (a longer lag shrinks the swing of ``T_e``: a narrower width). Taken when
+        it lowers the deviance and the runs still identify `term` at it."""
+        m = self.model
+        ranges = {"tau_e": m.lag_tau_s, "tau_e2": m.lag_tau_s, "width": (min(m.widths_c), max(m.widths_c))}
+        lo, hi = np.log([ranges[k][0] for k in keys]), np.log([ranges[k][1] for k in keys])
+
+        def at(logs) -> Spec:
+            values = np.exp(np.clip(logs, lo, hi))
+            if keys == ("tau_e", "tau_e2"):  # the first stage the shorter
+                values = np.sort(values)
+            return dataclasses.replace(spec, **{k: float(v) for k, v in zip(keys, values)})
 
         def deviance(logs):
-            a, b = np.exp(np.clip(logs, lo, hi))
-            return self.deviance(self.design(dataclasses.replace(spec, tau_e=float(min(a, b)), tau_e2=float(max(a, b))))[0], noise)[0]
+            return self.deviance(self.design(at(logs))[0], noise)[0]
 
-        start = np.log([spec.tau_e, spec.tau_e2])
+        start = np.log([getattr(spec, k) for k in keys])
         result = optimize.minimize(deviance, start, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 0.01, "maxiter": 200})
-        a, b = np.exp(np.clip(result.x, lo, hi))
-        trial = dataclasses.replace(spec, tau_e=float(min(a, b)), tau_e2=float(max(a, b)))
-        if result.fun < deviance(start) and self.identified(dataclasses.replace(spec, tau_e2=0.0, series=False), trial, "second_lag") is None:
+        trial = at(result.x)
+        if result.fun < deviance(start) and self.identified(dataclasses.replace(spec, **without), trial, term) is None:
             return trial
         return spec
 
@@ -417,7 +454,7 @@ def _params(spec: Spec, term: str) -> dict:
     return {
         "thermal_lag": {"tau_s": spec.tau_e},
         "temp_rate": {"heating_cooling_apart": spec.rate_form == 2, "filter_tau_s": spec.tau_r},
-        "hysteresis": {"width_c": spec.width, "operator": "relay" if spec.relay else "play"},
+        "hysteresis": {"width_c": spec.width, "operator": "relay" if spec.relay else "play", "input": "element" if spec.on_element and spec.tau_e else "temperature"},
         "warmup": {"tau_s": spec.tau_w},
         "second_lag": {"tau_s": spec.tau_e2, "path": "series" if spec.series else "parallel"},
         "second_warmup": {"tau_s": spec.tau_w2},

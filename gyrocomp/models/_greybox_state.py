@@ -40,6 +40,7 @@ class Spec:
     rate_sat: float = 0.0  # the dT/dt sensitivity saturates: s tanh(dT/dt / s), s in degC/s (with rate_form)
     series: bool = False  # the second element lag is in series with the first (the cubic at its output), not in parallel
     width2: float = 0.0  # a second play's width, degC (with width): a spread of widths, Prandtl-Ishlinskii's sum of plays
+    on_element: bool = False  # the hysteresis switches on T_e (with tau_e and width), not on the measured T
 
     def terms(self) -> list[str]:
         present = (self.tau_e > 0, self.rate_form > 0, self.width > 0, self.tau_w > 0, self.tau_e2 > 0, self.tau_w2 > 0, self.rate_sat > 0,
@@ -58,7 +59,7 @@ def kernel(time_s, temperature_c, state, spec: Spec) -> np.ndarray:
 
     out = np.empty((time_s.size, 5))
     advance(time_s, temperature_c, state, float(spec.tau_e), float(spec.tau_r or 1.0), 0.5 * float(spec.width), bool(spec.relay),
-            float(spec.tau_e2), bool(spec.series), 0.5 * float(spec.width2), out)
+            float(spec.tau_e2), bool(spec.series), 0.5 * float(spec.width2), bool(spec.on_element and spec.tau_e), out)
     return out
 
 

@@ -27,7 +27,8 @@ the effect shapes of the vocabulary (:mod:`gyrocomp.effects.vocabulary`):
   or a direction relay; where it pays, a second play of another width
   (``second_hysteresis``): two terms of a Prandtl-Ishlinskii sum of plays,
   for a part whose hysteresis is spread over several widths (a Preisach
-  distribution of switching temperatures);
+  distribution of switching temperatures); beside a lag, the hysteresis
+  switches on the measured T or on ``T_e``, whichever the BIC prefers;
 * ``warmup``: ``A exp(-t_on / tau_w)``, ``t_on`` the time since power-on
   (the recording's first sample unless told otherwise).
 
@@ -139,7 +140,8 @@ class GreyBoxDrift(Params):
         ``tau_e_s``, ``rate_form`` (0, 1, 2), ``width_c``, ``tau_w_s``,
         ``rate_tau_s``, ``hysteresis_operator``, ``tau_e2_s``, ``tau_w2_s``,
         ``rate_saturation_c_per_s``, ``width2_c`` (0: a term absent),
-        ``second_lag_path`` (``parallel`` or ``series``).
+        ``second_lag_path`` (``parallel`` or ``series``), ``hysteresis_input``
+        (``temperature`` or ``element``: the hysteresis switches on T or on T_e).
     coef_ : dict of str to float
         Column coefficients [deg/s per column unit]: ``z1..z3``, ``rate``,
         ``rate_abs``, ``play`` or ``relay``, ``play2``, ``warmup``, ``warmup2``, ``lag2``.
@@ -250,7 +252,7 @@ class GreyBoxDrift(Params):
         self.spec_ = {"tau_e_s": spec.tau_e, "rate_form": spec.rate_form, "width_c": spec.width, "tau_w_s": spec.tau_w, "rate_tau_s": spec.tau_r,
                       "hysteresis_operator": "relay" if spec.relay else "play", "tau_e2_s": spec.tau_e2, "tau_w2_s": spec.tau_w2,
                       "rate_saturation_c_per_s": spec.rate_sat, "second_lag_path": "series" if spec.series else "parallel",
-                      "width2_c": spec.width2}
+                      "width2_c": spec.width2, "hysteresis_input": "element" if spec.on_element and spec.tau_e else "temperature"}
         n_runs = len(prepared)
         self.run_offsets_ = [float(b) for b in beta[:n_runs]]
         weights = np.array([p.duration_s for p in prepared])
@@ -365,16 +367,17 @@ class GreyBoxDrift(Params):
         """The fitted nonlinear specification (:class:`~gyrocomp.models._greybox_state.Spec`)."""
         s = self.spec_
         return Spec(s["tau_e_s"], s["rate_form"], s["width_c"], s["tau_w_s"], s["rate_tau_s"], s["hysteresis_operator"] == "relay",
-                    s["tau_e2_s"], s["tau_w2_s"], s["rate_saturation_c_per_s"], s["second_lag_path"] == "series", s["width2_c"])
+                    s["tau_e2_s"], s["tau_w2_s"], s["rate_saturation_c_per_s"], s["second_lag_path"] == "series", s["width2_c"],
+                    s["hysteresis_input"] == "element")
 
 
 _ADDED_SPEC = {"hysteresis_operator": "play", "tau_e2_s": 0.0, "tau_w2_s": 0.0, "rate_saturation_c_per_s": 0.0, "second_lag_path": "parallel",
-               "width2_c": 0.0}
+               "width2_c": 0.0, "hysteresis_input": "temperature"}
 """The spec entries versions 2 (the relay, the second time constants), 3 (the saturation, lags in series) and 4
-(a second play) added, at the values an older model holds."""
+(a second play, the hysteresis switching on T_e) added, at the values an older model holds."""
 
 
-_CHOICES = {"hysteresis_operator": ("play", "relay"), "second_lag_path": ("parallel", "series")}
+_CHOICES = {"hysteresis_operator": ("play", "relay"), "second_lag_path": ("parallel", "series"), "hysteresis_input": ("temperature", "element")}
 """The spec entries that name a form, and the names they take."""
 
 

@@ -61,7 +61,8 @@ def _relay(T, width, start=1.0):
 
 
 def _gyro(t, T, seed, *, tau_e=400.0, rate=1.5, asym=0.5, play=0.01, width=4.0, warm=0.03, tau_w=900.0, rrw=2e-6,
-          relay=0.0, lag2=0.0, tau_e2=3000.0, warm2=0.0, tau_w2=4000.0, sat=0.0, series=False, play2=0.0, width2=12.0):
+          relay=0.0, lag2=0.0, tau_e2=3000.0, warm2=0.0, tau_w2=4000.0, sat=0.0, series=False, play2=0.0, width2=12.0,
+          on_element=False):
     rng = np.random.default_rng(seed)
     Te = _lag(t, T, tau_e)
     if series:  # the die behind a second stage: the cubic of the lag of T_e
@@ -72,11 +73,12 @@ def _gyro(t, T, seed, *, tau_e=400.0, rate=1.5, asym=0.5, play=0.01, width=4.0, 
     if sat:  # a sensitivity that saturates at `sat` degC/s
         r = sat * np.tanh(r / sat)
     bias += rate * r + asym * np.abs(r)
+    x = Te if on_element else T  # what the hysteresis switches on
     for amplitude, w in ((play, width), (play2, width2)):
-        p, out = T[0], np.empty_like(T)
-        for i in range(T.size):
-            p = min(max(p, T[i] - w / 2), T[i] + w / 2)
-            out[i] = (T[i] - p) / (w / 2)
+        p, out = x[0], np.empty_like(x)
+        for i in range(x.size):
+            p = min(max(p, x[i] - w / 2), x[i] + w / 2)
+            out[i] = (x[i] - p) / (w / 2)
         bias += amplitude * out
     bias += warm * np.exp(-(t - t[0]) / tau_w) + warm2 * np.exp(-(t - t[0]) / tau_w2)
     bias += relay * _relay(T, width) + (lag2 * (_lag(t, T, tau_e2) - 25.0) if lag2 else 0.0)
@@ -135,13 +137,16 @@ SECOND = {  # the forms a single term cannot hold, each with its own term beside
                         {"spec:rate_saturation_c_per_s": 0.005, "coef:rate": 1.5}),
     "two_plays": (dict(tau_e=0.0, rate=0.0, asym=0.0, warm=0.0, play2=0.015), ("hysteresis", "second_hysteresis"),
                   {"spec:width_c": 4.0, "coef:play": 0.01, "spec:width2_c": 12.0, "coef:play2": 0.015}),
+    "play_on_the_element": (dict(rate=0.0, asym=0.0, warm=0.0, play=0.05, width=8.0, on_element=True), ("thermal_lag", "hysteresis"),
+                            {"spec:tau_e_s": 400.0, "spec:width_c": 8.0, "coef:play": 0.05}),
 }
 
 
 @pytest.mark.parametrize("form", list(SECOND))
 def test_a_relay_and_second_time_constants_are_selected_and_recovered_within_10_percent(form):
     """A direction relay (the two-branch hysteresis), two parallel heat paths, a two-exponential warm-up, a dT/dt
-    sensitivity that saturates at 0.3 degC/min (the cycle ramps at up to 0.67), plays of 4 and 12 degC."""
+    sensitivity that saturates at 0.3 degC/min (the cycle ramps at up to 0.67), plays of 4 and 12 degC, an 8 degC play
+    switching on the element's temperature (400 s behind the sensor's)."""
     t = np.arange(0, 21600.0)
     T = _chamber(t, *CYCLE)
     changes, terms, truth = SECOND[form]
@@ -151,6 +156,7 @@ def test_a_relay_and_second_time_constants_are_selected_and_recovered_within_10_
     if form == "relay":
         assert m.spec_["hysteresis_operator"] == "relay"
     assert m.spec_["second_lag_path"] == ("series" if form == "series_lags" else "parallel")
+    assert m.spec_["hysteresis_input"] == ("element" if form == "play_on_the_element" else "temperature")
     if form == "second_warmup":
         # The curve within 3 % of its amplitude (measured 1.4-3.1 deg/h of 180 on three seeds), the time constants
         # within 25 %: the slow one trades against the cubic in T, the cycle heating from its 30th minute
@@ -282,7 +288,7 @@ def test_the_stateful_kernel_equals_the_registry_shapes_and_chunks_give_the_same
     T = _chamber(t, [0, 500, 1500, 2000, 3000], [20, 30, 22, 28, 21], tau_s=60.0)
     for relay, operator, series in ((False, shapes.hysteresis_play, False), (True, shapes.hysteresis_branch, True)):
         out = np.empty((t.size, 5))
-        advance(t, T, new_state(), 120.0, 30.0, 1.5, relay, 700.0, series, 0.8, out)
+        advance(t, T, new_state(), 120.0, 30.0, 1.5, relay, 700.0, series, 0.8, False, out)
         te = shapes.element_temperature(t, T, 120.0)
         np.testing.assert_allclose(out[:, 0], te, rtol=0, atol=1e-10)
         np.testing.assert_allclose(out[:, 3], shapes.element_temperature(t, te if series else T, 700.0), rtol=0, atol=1e-10)
@@ -294,8 +300,11 @@ def test_the_stateful_kernel_equals_the_registry_shapes_and_chunks_give_the_same
         np.testing.assert_allclose(out[second:, 4], shapes.hysteresis_play(t, T, 1.6)[second:], rtol=0, atol=1e-12)
         state, chunks = new_state(), np.empty_like(out)
         for lo in range(0, t.size, 777):
-            advance(t[lo : lo + 777], T[lo : lo + 777], state, 120.0, 30.0, 1.5, relay, 700.0, series, 0.8, chunks[lo : lo + 777])
+            advance(t[lo : lo + 777], T[lo : lo + 777], state, 120.0, 30.0, 1.5, relay, 700.0, series, 0.8, False, chunks[lo : lo + 777])
         assert np.array_equal(chunks, out)
+        advance(t, T, new_state(), 120.0, 30.0, 1.5, relay, 700.0, series, 0.8, True, out)  # switching on T_e
+        first = shapes.first_excursion(te, 3.0)
+        np.testing.assert_allclose(out[first:, 2], operator(t, te, 3.0)[first:], rtol=0, atol=1e-12)
 
 
 def test_a_gap_is_bridged_exactly_for_a_temperature_linear_through_it(cycle_model):
@@ -381,7 +390,7 @@ def _relay_and_second_time_constants(model, path="parallel"):
     (C against Python needs no fit)."""
     d = json.loads(json.dumps(model.to_dict()))
     d["fitted"]["spec_"] |= {"hysteresis_operator": "relay", "tau_e2_s": 2500.0, "tau_w2_s": 3000.0, "rate_saturation_c_per_s": 0.004,
-                             "second_lag_path": path, "width2_c": 9.0}
+                             "second_lag_path": path, "width2_c": 9.0, "hysteresis_input": "element" if path == "series" else "temperature"}
     coef = d["fitted"]["coef_"]
     coef |= {"relay": coef.pop("play"), "warmup2": 0.02, "play2": 0.004} | ({"lag2": 0.05} if path == "parallel" else {})
     return GreyBoxDrift.from_dict(d)
@@ -424,8 +433,9 @@ def test_c_header_compiles_strictly_and_reproduces_python(cycle_model, tmp_path,
         assert worst < bound, (real, worst)
     if variant != "fitted":
         assert "s->br" in header and "s->te2" in header and header.count("exp(-(t - s->t_on)") == 2 and "tanh(r / " in header
-        assert "(t_c - s->p2) / (gyrocomp_real)4.5" in header
+        assert " - s->p2) / (gyrocomp_real)4.5" in header
         assert ("te = s->te2;" in header) == (variant == "series")
+        assert ("s->hi - s->te >" in header) == (variant == "series")  # the relay switches on T_e
         return
     with pytest.raises(InputError, match=r"--static-part writes its cubic in T alone, which leaves 1 deg/h RMS"):
         export_model(model, "px4", ExportOptions())
