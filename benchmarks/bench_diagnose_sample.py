@@ -48,6 +48,21 @@ def gyrocomp(tree: Path) -> list[str]:
     return [sys.executable, "-c", f"import sys; sys.path.insert(0, {str(tree)!r}); from gyrocomp.cli import main; main()"]
 
 
+WARM_UP = """
+import sys
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from gyrocomp.decompose import emd
+emd.emd(np.random.default_rng(0).standard_normal(5000).cumsum())
+"""
+
+
+def warm_up(tree: Path) -> None:
+    """Compile (or load) `tree`'s numba kernels that `diagnose` calls (the EMD of its localization), not counted:
+    numba caches machine code beside each source file, so an exported tree compiles on its first run."""
+    subprocess.run([sys.executable, "-c", WARM_UP, str(tree)], check=True, capture_output=True)
+
+
 def timed(tree: Path, out: Path) -> dict:
     """One run of the sample pair with `tree`'s code, writing into `out`: wall, CPU, peak memory and the load around it."""
     out.mkdir(parents=True, exist_ok=True)
@@ -105,6 +120,8 @@ def main(argv=None) -> int:
     parser.add_argument("--against", help="a commit whose code runs alternated with this checkout's")
     args = parser.parse_args(argv)
     trees = {"this": ROOT} | ({"against": exported(args.against)} if args.against else {})
+    for tree in trees.values():
+        warm_up(tree)
     runs = {name: [] for name in trees}
     for i in range(args.repeats):
         for name, tree in trees.items():

@@ -63,6 +63,8 @@ __all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "markov_bl
 _LN_FLOOR = -60.0
 """Lower bound of a fitted log-variance: ``exp(-60)`` is numerically zero."""
 
+_COLOURED = ("bias_instability", "rate_random_walk")
+
 
 @dataclasses.dataclass(frozen=True)
 class NoiseModel:
@@ -288,11 +290,15 @@ def profile_deviance(y, X, whitener):
     deviance : float
     beta : ndarray, shape (p,)
     """
-    yw = whitener.whiten(y)
-    Xw = whitener.whiten(X)
+    beta, rss = _gls(whitener.whiten(y), whitener.whiten(X))
+    return float(whitener.logdet + rss + y.size * np.log(2.0 * np.pi)), beta
+
+
+def _gls(yw, Xw):
+    """Least squares of whitened `yw` on whitened `Xw`: ``(beta, residual sum of squares)``."""
     beta, *_ = linalg.lstsq(Xw, yw, cond=1e-12, lapack_driver="gelsy", check_finite=False)
     r = yw - Xw @ beta
-    return float(whitener.logdet + r @ r + y.size * np.log(2.0 * np.pi)), beta
+    return beta, float(r @ r)
 
 
 class _Whitener:
@@ -354,7 +360,12 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
     free : sequence of str
         Terms whose log-variances are optimised (Nelder-Mead, from `start`;
         a flicker or random-walk term starts no lower than where it matches
-        0.3 times the white level at one block).
+        0.3 times the white level at one block). When ``arw`` comes first and
+        every other term of `start` is free, ``Sigma = N^2 Sigma_1`` and the
+        white level ``N^2`` is concentrated out (its ML value is the mean
+        squared residual whitened by ``Sigma_1``): Nelder-Mead searches the
+        coloured terms' log ratios to it, one dimension fewer and about half
+        the evaluations, to the same optimum.
 
     Returns
     -------
@@ -373,49 +384,79 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
     x0 = np.array([np.log(max(getattr(start, name), level[name], 1e-30) ** 2) for name in names])
     x0 = np.maximum(x0, _LN_FLOOR + 5.0)
 
-    def model(z):
+    # When every term present is free, Sigma = N^2 Sigma_1 with Sigma_1 a function of the
+    # coloured terms' ratios to the white level; N^2 then has a closed-form maximum (the
+    # mean squared residual whitened by Sigma_1: the concentrated likelihood, as GLS
+    # concentrates beta) and Nelder-Mead searches the ratios, one dimension fewer.
+    scaled = names[0] == "arw" and len(names) > 1 and all(name in names for name in _COLOURED if getattr(start, name))
+    if scaled:
+        x0 = x0[1:] - x0[0]
+
+    def model(z, white_variance=None):
+        """The noise model at log-variances `z`; with `white_variance` ``N^2``, `z` holds the coloured terms' log ratios to it."""
         values = dataclasses.asdict(start)
+        if white_variance is not None:
+            values["arw"] = float(np.sqrt(white_variance))
+            z = [white_variance * np.exp(max(v, _LN_FLOOR)) for v in z]
+            for name, v in zip(names[1:], z):
+                values[name] = float(np.sqrt(v))
+            return NoiseModel(**values)
         for name, v in zip(names, z):
             values[name] = float(np.exp(0.5 * max(v, _LN_FLOOR)))
         return NoiseModel(**values)
 
     rotated = {}
 
-    def run_deviance(k, y, X, w):
-        if w.d is None:
-            try:
-                return profile_deviance(y, X, w)[0]
-            except linalg.LinAlgError:
-                return np.inf
-        # Same eigenvectors for every noise model of this family: rotate once.
-        key = (k, id(w.q))
-        if key not in rotated:
-            rotated[key] = (y, X) if w.q is None else (w.q.T @ y, w.q.T @ X)
-        yq, Xq = rotated[key]
-        return profile_deviance(yq, Xq, _Whitener(None, w.d))[0]
+    def run_terms(k, y, X, w):
+        """``(log det Sigma, r' Sigma^-1 r)`` of run `k` at its GLS beta."""
+        if w.d is not None:
+            # Same eigenvectors for every noise model of this family: rotate once.
+            key = (k, id(w.q))
+            if key not in rotated:
+                rotated[key] = (y, X) if w.q is None else (w.q.T @ y, w.q.T @ X)
+            y, X = rotated[key]
+            w = _Whitener(None, w.d)
+        try:
+            return w.logdet, _gls(w.whiten(y), w.whiten(X))[1]
+        except linalg.LinAlgError:
+            return w.logdet, np.inf
 
     def objective(z):
-        noise = model(z)
+        noise = model(z, 1.0 if scaled else None)
         # Runs of one length and block share their covariance: factorise it once.
         whiteners = {}
-        total = 0.0
+        total, logdet, rss, n = 0.0, 0.0, 0.0, 0
         for k, (y, X, basis) in enumerate(runs):
             key = (basis.n_blocks, basis.block_s)
             if key not in whiteners:
                 whiteners[key] = basis.whitener(noise)
-            total += run_deviance(k, y, X, whiteners[key])
+            terms = run_terms(k, y, X, whiteners[key])
+            total += float(terms[0] + terms[1] + y.size * np.log(2.0 * np.pi))
+            logdet, rss, n = logdet + terms[0], rss + terms[1], n + y.size
+        if scaled:
+            # -2 log L at the ML scale N^2 = rss / n of Sigma = N^2 Sigma_1.
+            return logdet + n * np.log(max(rss / n, 1e-300)) + n + n * np.log(2.0 * np.pi)
         return total
 
     best = optimize.minimize(
         objective, x0, method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 1e-2, "initial_simplex": _simplex(x0)}
     )
-    noise = model(best.x)
+    noise = model(best.x, _white_variance(runs, model(best.x, 1.0)) if scaled else None)
     deviance, betas = 0.0, []
     for y, X, basis in runs:
         dev, beta = profile_deviance(y, X, basis.whitener(noise))
         deviance += dev
         betas.append(beta)
     return noise, deviance, betas
+
+
+def _white_variance(runs, unit: NoiseModel):
+    """The ML ``N^2`` of ``Sigma = N^2 Sigma_1`` over `runs`, ``Sigma_1`` the covariance of `unit` (``arw`` 1)."""
+    rss = 0.0
+    for y, X, basis in runs:
+        w = basis.whitener(unit)
+        rss += _gls(w.whiten(y), w.whiten(X))[1]
+    return max(rss / sum(y.size for y, _, _ in runs), 1e-300)
 
 
 def _simplex(x0, step=2.0):

@@ -94,6 +94,31 @@ def test_fit_noise_recovers_bias_instability(b_deg_h):
     assert_allclose(noise.arw * 60, 1.0, rtol=0.1)
 
 
+def test_fit_noise_concentrates_the_white_level_to_the_same_optimum():
+    """White, flicker and random walk free: the ratios' search with N^2 concentrated out reaches the deviance of a
+    tight three-dimensional search, and N^2 is its closed-form ML (no better N nearby)."""
+    from scipy import optimize
+
+    rng = np.random.default_rng(7)
+    fs, n = 1.0, 4 * 3600
+    x = sim_noise.white(n, fs, 1.0, rng) + sim_noise.flicker(n, fs, 15.0, rng) + np.cumsum(rng.standard_normal(n)) * 3e-4
+    y = block_means(x, 20)
+    X = np.column_stack([np.ones(y.size), np.linspace(-1.0, 1.0, y.size)])
+    basis = NoiseBasis(y.size, 20.0)
+    free = ("arw", "bias_instability", "rate_random_walk")
+    noise, deviance, _ = fit_noise(y, X, basis, NoiseModel(arw=1 / 60, bias_instability=1e-3), free)
+
+    def full(z):
+        return profile_deviance(y, X, basis.whitener(NoiseModel(*np.exp(0.5 * z))))[0]
+
+    z0 = np.log([noise.arw**2, noise.bias_instability**2, noise.rate_random_walk**2])
+    tight = optimize.minimize(full, z0 + 0.5, method="Nelder-Mead", options={"xatol": 1e-6, "fatol": 1e-8, "maxfev": 4000})
+    assert deviance == pytest.approx(full(z0), abs=1e-9)
+    assert deviance <= tight.fun + 1e-2
+    for scale in (0.99, 1.01):  # N^2 at its maximum given the ratios
+        assert full(z0 + np.log(scale)) > deviance
+
+
 def test_periodic_grid_deviances_equal_the_direct_fits():
     """The batched period scan equals one least-squares fit per period, alone and on two runs."""
     import pandas as pd
