@@ -182,10 +182,12 @@ def _periodic_waveform(parts, periods, settings, length_s, block_s, deviance):
     h_max = np.array([effect.max_harmonics(settings, p, length_s, block_s) for p in periods])
     log_n = np.log(sum(part.y_w.size for part in parts))
     best_score, best = np.inf, None
+    # Harmonic k's columns are the same in every series that has it: whiten each period's once.
+    whitened = [_whitened_harmonics(part, periods, h_max) for part in parts]
     for h in range(1, int(h_max.max()) + 1):
-        ok = h_max >= h
+        ok = np.flatnonzero(h_max >= h)
         values = np.full(len(periods), np.inf)
-        values[ok] = _periodic_grid_deviances(parts, periods[ok], h)
+        values[ok] = _periodic_grid_deviances(parts, periods[ok], h, [[w[i] for i in ok] for w in whitened])
         period, dev = _refine(periods, values, lambda p: deviance({"period_s": p, "harmonics": h}))
         score = dev + 2 * h * len(parts) * log_n
         if score < best_score:
@@ -222,14 +224,33 @@ class _JointPart:
         return self.whitener.whiten(block_means(full, run.n_per_block)), names
 
 
-def _periodic_grid_deviances(parts, periods, harmonics=1):
+def _whitened_harmonics(part: _JointPart, periods, h_max) -> list:
+    """Whitened block means of each period's sin/cos columns up to its own largest number of harmonics `h_max`.
+
+    Returns a list, one array of shape ``(n_blocks, 2 h_max[g])`` per period
+    (columns in :func:`~gyrocomp.diagnose.effects.periodic_block_means` order,
+    so the first ``2 h`` are the series of ``h`` harmonics); periods of one
+    ``h_max`` are whitened in one product.
+    """
+    out = [np.empty((part.y_w.size, 0))] * len(periods)
+    for h in np.unique(h_max[h_max > 0]):
+        index = np.flatnonzero(h_max == h)
+        cols = part.whitener.whiten(np.hstack([periodic_block_means(part.problem.run, periods[i], h) for i in index]))
+        for j, i in enumerate(index):
+            out[i] = cols[:, 2 * h * j : 2 * h * (j + 1)]
+    return out
+
+
+def _periodic_grid_deviances(parts, periods, harmonics=1, whitened=None):
     """:func:`_joint_deviance` of ``periodic`` of `harmonics` harmonics at every period of a grid, in a few matrix products.
 
     The base columns do not change along the grid: with ``U`` an orthonormal
     basis of the (stacked, whitened) base design, ``y_perp = y - U U' y``
     and the sin/cos columns ``C`` of one period (per run), the deviance is
     ``constant + |y_perp|^2 - b' A^+ b`` with ``b = C' y_perp`` and
-    ``A = C'C - (U'C)'(U'C)``; all periods' ``C`` are whitened at once.
+    ``A = C'C - (U'C)'(U'C)``; all periods' ``C`` are whitened at once, or
+    taken from `whitened` (per part, per period, at least ``2 harmonics``
+    whitened columns: :func:`_whitened_harmonics`).
     """
     c = 2 * int(harmonics)
     free = [np.array([n in PER_RUN for n in part.base_names]) for part in parts]
@@ -246,8 +267,11 @@ def _periodic_grid_deviances(parts, periods, harmonics=1):
     row = 0
     for j, part in enumerate(parts):
         k = part.y_w.size
-        cols = np.hstack([periodic_block_means(part.problem.run, p, harmonics) for p in periods])  # (k, c G)
-        cw = part.whitener.whiten(cols).reshape(k, n_g, c).transpose(1, 0, 2)  # (G, k, c)
+        if whitened is None:
+            cols = np.hstack([periodic_block_means(part.problem.run, p, harmonics) for p in periods])  # (k, c G)
+            cw = part.whitener.whiten(cols).reshape(k, n_g, c).transpose(1, 0, 2)  # (G, k, c)
+        else:
+            cw = np.stack([w[:, :c] for w in whitened[j]])  # (G, k, c)
         gram[:, c * j : c * j + c, c * j : c * j + c] = np.einsum("gki,gkj->gij", cw, cw)
         b[:, c * j : c * j + c] = np.einsum("gki,k->gi", cw, y_perp[row : row + k])
         ucs[:, :, c * j : c * j + c] = np.einsum("kp,gki->gpi", u[row : row + k], cw)

@@ -148,6 +148,11 @@ def test_periodic_grid_deviances_equal_the_direct_fits():
         direct = [nonlinear._joint_deviance(parts, {"period_s": float(p)}, "periodic").sum() for p in periods]
         assert_allclose(nonlinear._periodic_grid_deviances(parts, periods), direct, rtol=1e-10)
         assert 850.0 < periods[int(np.argmin(direct))] < 950.0
+        # Three harmonics from columns whitened once with each period's own largest number (3 or 5) of harmonics.
+        h_max = np.where(np.arange(periods.size) % 2, 3, 5)
+        whitened = [nonlinear._whitened_harmonics(part, periods, h_max) for part in parts]
+        direct3 = [nonlinear._joint_deviance(parts, {"period_s": float(p), "harmonics": 3}, "periodic").sum() for p in periods]
+        assert_allclose(nonlinear._periodic_grid_deviances(parts, periods, 3, whitened), direct3, rtol=1e-10)
 
 
 def _ar1(n, sigma, tc, fs, rng):
