@@ -154,6 +154,10 @@ _DECOMPRESSORS = {
 """A fresh decompressor of one frame (member, stream) per extension; each has ``decompress``, ``eof`` and ``unused_data``."""
 
 
+_ZIP_METHODS = {zipfile.ZIP_STORED: "stored", zipfile.ZIP_DEFLATED: "deflate", zipfile.ZIP_BZIP2: "bzip2", zipfile.ZIP_LZMA: "lzma"}
+"""The zip compression methods Python's zipfile decompresses (method number: name)."""
+
+
 def _zip_member(name: str, raw):
     """The one member of a ``.zip`` as a stream (zipfile checks its CRC at the end)."""
     try:
@@ -161,10 +165,17 @@ def _zip_member(name: str, raw):
         members = [m for m in archive.infolist() if not m.is_dir()]
         if len(members) != 1:
             raise InputError(f"{name}: a zipped recording holds exactly one file, this one {len(members)}")
-        return archive.open(members[0])
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, EOFError, OSError) as err:
+        member = members[0]
+        if member.compress_type not in _ZIP_METHODS:
+            raise InputError(f"{name}: {member.filename} is compressed with zip method {member.compress_type}, which gyrocomp does not read "
+                             f"({', '.join(_ZIP_METHODS.values())}); recompress it, or decompress it first")
+        return archive.open(member)
+    except InputError:
         raw.close()
-        raise InputError(f"{name}: damaged or unsupported zip archive ({err})") from None
+        raise
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError) as err:
+        raw.close()
+        raise InputError(f"{name}: damaged zip archive ({err})") from None
 
 
 class _Checked(io.RawIOBase):

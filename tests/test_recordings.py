@@ -154,6 +154,22 @@ def test_compressed_csv_reads_like_the_plain_file(tmp_path, suffix):
     assert b.sha256 == artefacts.file_sha256(packed)
 
 
+def test_a_zip_member_in_a_method_zipfile_cannot_read_is_refused_by_name(tmp_path):
+    """Deflate64 (method 9), which Windows' Explorer writes for large files: a one-line error naming the member and method."""
+    import zipfile
+
+    path = tmp_path / "imu.csv.zip"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED) as archive:
+        archive.writestr("imu.csv", "time,rate\n0,1\n1,2\n")
+    data = bytearray(path.read_bytes())
+    central = data.index(b"PK\x01\x02")  # the central directory's method field, which zipfile reads
+    data[central + 10 : central + 12] = (9).to_bytes(2, "little")
+    path.write_bytes(bytes(data))
+    with pytest.raises(InputError, match=r"imu\.csv\.zip: imu\.csv is compressed with zip method 9, which gyrocomp does not read "
+                                         r"\(stored, deflate, bzip2, lzma\); recompress it"):
+        read_recording(path)
+
+
 def test_semicolon_and_decimal_comma(tmp_path):
     text = "time;rate;temperature\n0,0;1,5;20,25\n0,5;1,75;20,5\n1,0;2,0;20,75\n"
     path = tmp_path / "lab.csv"
