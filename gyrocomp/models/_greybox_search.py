@@ -31,6 +31,10 @@ SERIES_SHARES = (0.03, 0.06, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5)
 SATURATION_GRID_POINTS = 13
 """Points of the log grid of the dT/dt saturation rate (then refined)."""
 
+ASYMMETRY = "temp_rate_heating_cooling_apart"
+"""The name under which ``not_fitted`` reports a dT/dt sensitivity the runs cannot split into heating and cooling
+(runs that only heat or only cool, where ``|dT/dt|`` is ``dT/dt`` or its negative)."""
+
 SETTLE_TAUS = 5.0
 """The causal dT/dt starts at 0 (the filter cold); the first ``SETTLE_TAUS * rate_tau_s[1]`` seconds of a run
 (of every segment when gaps are not bridged) take no part in the fit, so its settling is never read as an effect
@@ -276,7 +280,7 @@ class Search:
         blocks, _, names = self.design(spec)
         noise, deviance, _ = self.fit_noise(blocks)
         score = self.bic(deviance, self.n_params(spec, names, 3))
-        not_fitted = {}
+        not_fitted, one_way_reason = {}, None
         if "warmup" in m.terms and any(r.run.power_on_s is None for r in self.runs):
             not_fitted["warmup"] = (
                 "warmup not fitted: a training run does not start at power-on and gives no power-on time, so the time since power-on is unknown"
@@ -288,6 +292,14 @@ class Search:
             refusals = [self.identified(spec, dataclasses.replace(spec, **change), term) for change in grids[term]]
             if all(r is not None for r in refusals):
                 not_fitted[term] = max(refusals, key=lambda r: r.unique).reason  # the nearest miss (the narrowest play)
+            elif term == "temp_rate" and all(r is not None for r, c in zip(refusals, grids[term]) if c["rate_form"] == 2):
+                one_way = max((r for r, c in zip(refusals, grids[term]) if c["rate_form"] == 2), key=lambda r: r.unique)
+                seen, unseen = ("cool", "heating") if sum(float(r.temperature_c[-1] - r.temperature_c[0]) for r in self.runs) < 0 else ("heat", "cooling")
+                one_way_reason = (
+                    f"{ASYMMETRY} not fitted: the training runs only {seen} (|dT/dt| is a linear function of dT/dt and the cubic, "
+                    f"1 - R^2 = {one_way.unique:.2g} < {m.min_unique_variance:g}), so a {unseen} sensitivity apart cannot be told; "
+                    f"the one dT/dt sensitivity fitted is applied to {unseen} too; add a run that {'heats' if seen == 'cool' else 'cools'}"
+                )
         for second, first in JOINS.items():  # a joining term where the term it joins cannot be fitted
             if second in m.terms and first in not_fitted:
                 not_fitted[second] = f"{second} not fitted: {first} is not ({not_fitted[first].split(': ', 1)[1]})"
@@ -345,7 +357,10 @@ class Search:
         self.noise = self.fit_noise(blocks, noise)[0]
         for step in steps:
             step["params"] = _params(spec, step["term"])
-        return spec, steps, [{"term": t, "reason": not_fitted[t]} for t in m.terms if t in not_fitted]
+        refused = [{"term": t, "reason": not_fitted[t]} for t in m.terms if t in not_fitted]
+        if spec.rate_form == 1 and one_way_reason:  # a sensitivity of one direction, applied to the other: say so
+            refused.append({"term": ASYMMETRY, "reason": one_way_reason})
+        return spec, steps, refused
 
     def replace(self, spec: Spec, term: str, noise) -> Spec:
         """`spec` with the parameters of `term`, already in, at the best point of its grid beside the others (lowest

@@ -256,6 +256,27 @@ def test_dtdt_in_a_single_warmup_is_refused_with_its_reason():
     assert refusal["term"] == "temp_rate" and "linear function of T, T^2, T^3 (1 - R^2 = " in refusal["reason"]
 
 
+@pytest.mark.parametrize("direction", ["cooling", "heating"])
+def test_heating_and_cooling_apart_is_refused_on_runs_of_one_direction(direction):
+    """A run that only cools identifies the cooling sensitivity (rate - asym: 1.0) and nothing of the heating one."""
+    t = np.arange(0, 21600.0)
+    knots = [60, 60, 35, 35, 10, 10, -10, -10]
+    T = _chamber(t, [0, 1800, 5400, 7200, 10800, 12600, 16200, 21600], knots if direction == "cooling" else knots[::-1])
+    y, _ = _gyro(t, T, 3, tau_e=0.0, play=0.0, warm=0.0)
+    m = GreyBoxDrift(grid_points=8, terms=("temp_rate",)).fit([_run(t, T, y)])
+    assert m.spec_["rate_form"] == 1
+    assert m.coef_["rate"] == pytest.approx(1.0 if direction == "cooling" else 2.0, rel=0.05)
+    (refusal,) = m.not_fitted_
+    seen, unseen = ("cool", "heating") if direction == "cooling" else ("heat", "cooling")
+    assert refusal["term"] == "temp_rate_heating_cooling_apart"
+    assert refusal["reason"].startswith(f"temp_rate_heating_cooling_apart not fitted: the training runs only {seen} ")
+    assert f"applied to {unseen} too" in refusal["reason"]
+
+
+def test_heating_and_cooling_apart_is_not_refused_where_the_runs_heat_and_cool(cycle_model):
+    assert cycle_model.spec_["rate_form"] == 2 and cycle_model.not_fitted_ == []
+
+
 def test_a_hysteresis_whose_branch_never_changes_is_refused():
     t, T, y = _warmup_run()
     play = (T - np.maximum(T[0], T - 1.0)) / 1.0  # a 2 degC play on a monotonic heat-up
