@@ -299,13 +299,21 @@ def test_parquet_recording_equals_pandas_reading(tmp_path, with_nulls):
     assert rec.rate_dps[0] == 5.0  # once built, the frame is the recording's content
 
 
-def test_allan_on_parquet_never_imports_pandas(tmp_path):
-    """`gyrocomp allan` on a Parquet recording reads and analyses it without pandas (0.35 s of import)."""
+@pytest.mark.parametrize("temperature", [True, False])
+def test_allan_on_parquet_never_imports_pandas(tmp_path, temperature):
+    """`gyrocomp allan` on a Parquet recording reads and analyses it without pandas (0.35 s of import).
+
+    Without a temperature column (no thermal test, which uses scipy.stats)
+    it does not import ``scipy.special`` either (0.3-0.4 s of CPU): the
+    interval's chi-square quantiles equal scipy's ``gammaincinv`` to 1e-12.
+    """
     import subprocess
     import sys
 
+    from scipy.special import gammaincinv
+
     t = np.arange(3000) / 10.0
-    frame = pd.DataFrame({"time": t, "rate": _random_rate(len(t), 3), "temperature": 25.0 + 0 * t})
+    frame = pd.DataFrame({"time": t, "rate": _random_rate(len(t), 3), **({"temperature": 25.0 + 0 * t} if temperature else {})})
     frame.to_parquet(tmp_path / "rec.parquet", row_group_size=1000)  # with pandas' own metadata
     script = (
         "import runpy, sys\n"
@@ -313,14 +321,20 @@ def test_allan_on_parquet_never_imports_pandas(tmp_path):
         "try:\n    runpy.run_module('gyrocomp', run_name='__main__')\n"
         "except SystemExit as exit:\n    assert not exit.code, exit.code\n"
         "print('PANDAS', sorted(m for m in sys.modules if m.split('.')[0] == 'pandas'))\n"
+        "print('SPECIAL', 'scipy.special' in sys.modules)\n"
     )
     out = tmp_path / "allan.json"
     proc = subprocess.run([sys.executable, "-c", script, str(tmp_path / "rec.parquet"), str(out)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.splitlines()[-1] == "PANDAS []"
+    assert proc.stdout.splitlines()[-2] == "PANDAS []"
+    if not temperature:
+        assert proc.stdout.splitlines()[-1] == "SPECIAL False"
     (series,) = json.loads(out.read_text())["series"]
     ref = al.analyse(frame["rate"].to_numpy(), 10.0, taus="octave")
     assert_allclose(series["adev"], ref.adev, rtol=1e-12)
+    adev, edf, p = ref.adev, ref.edf, (1.0 - ref.confidence) / 2.0
+    assert_allclose(series["adev_lo"], adev * np.sqrt(edf / (2.0 * gammaincinv(edf / 2.0, 1.0 - p))), rtol=1e-12)
+    assert_allclose(series["adev_hi"], adev * np.sqrt(edf / (2.0 * gammaincinv(edf / 2.0, p))), rtol=1e-12)
 
 
 @pytest.mark.parametrize("d", [0, 1, 2])

@@ -5,6 +5,7 @@
                                   overlapping Allan deviation
 :mod:`~gyrocomp.allan.noise_id`   power-law noise identification, Greenhall's
                                   equivalent degrees of freedom, chi-square interval
+:mod:`~gyrocomp.allan.chi2`       the chi-square quantiles of that interval
 :mod:`~gyrocomp.allan.ieee952`    the five-term noise model, its constants and units
 :mod:`~gyrocomp.allan.fit`        the five-term fit and the classic read-offs
 :mod:`~gyrocomp.allan.analysis`   the analysis of a recording and its artefact

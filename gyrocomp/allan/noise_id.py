@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 
+from gyrocomp.allan.chi2 import chi2_ppf
 from gyrocomp.allan.deviation import _CHUNK, Phase
 
 __all__ = ["noise_id", "edf_oadev", "chi2_interval"]
@@ -191,12 +192,14 @@ def _sw(t, alpha):
 
 
 def chi2_interval(adev: np.ndarray, edf: np.ndarray, confidence: float) -> tuple[np.ndarray, np.ndarray]:
-    """sigma * sqrt(edf / chi2_{1-p}(edf)), sigma * sqrt(edf / chi2_p(edf)), p = (1 - level)/2 ([1]_ eq. (45))."""
-    from scipy.special import gammaincinv
+    """sigma * sqrt(edf / chi2_{1-p}(edf)), sigma * sqrt(edf / chi2_p(edf)), p = (1 - level)/2 ([1]_ eq. (45)).
 
+    The quantiles are :func:`gyrocomp.allan.chi2.chi2_ppf`'s (scipy's
+    ``2 gammaincinv(edf/2, p)`` to 1e-13, without importing ``scipy.special``).
+    """
     p = (1.0 - confidence) / 2.0
-    chi2_lo = 2.0 * gammaincinv(edf / 2.0, p)
-    chi2_hi = 2.0 * gammaincinv(edf / 2.0, 1.0 - p)
+    chi2_lo = chi2_ppf(p, edf)
+    chi2_hi = chi2_ppf(1.0 - p, edf)
     return adev * np.sqrt(edf / chi2_hi), adev * np.sqrt(edf / chi2_lo)
 
 
