@@ -35,8 +35,9 @@ whole process (``python -m gyrocomp ...``), peak resident memory from
     Parquet, about 10 GB of components on disk while training) is deleted
     afterwards.
 ``plot``
-    Peak memory of ``compensate --mode causal`` (polynomial) and of
-    ``train --config polynomial`` on 2 h at 1 kHz, without and with
+    Peak memory of ``compensate --mode causal`` (polynomial and
+    PE-LCD-ANFIS models) and of ``train --config polynomial`` and
+    ``train --config pe-lcd-anfis`` on 2 h at 1 kHz, without and with
     ``--plot`` (issue 35 item 9, issue 38: ``--plot`` adds at most 100 MB).
 ``rate``
     The O(1) dT/dt against the direct FIR (``np.convolve``) on 10 min at
@@ -161,10 +162,12 @@ def part_memory() -> dict:
 
 def part_plot() -> dict:
     source = oven(DATA / "oven_2h_1khz.parquet", 7200.0)
-    model = models()["polynomial"]
+    model = models()
     runs = {
-        "compensate": gyrocomp("compensate", source, model, "--mode", "causal", "--out", DATA / "p.parquet"),
+        "compensate": gyrocomp("compensate", source, model["polynomial"], "--mode", "causal", "--out", DATA / "p.parquet"),
         "train": gyrocomp("train", source, "--config", "polynomial", "--out", DATA / "p.json"),
+        "compensate_anfis": gyrocomp("compensate", source, model["pe-lcd-anfis"], "--mode", "causal", "--out", DATA / "p.parquet"),
+        "train_anfis": gyrocomp("train", source, "--config", "pe-lcd-anfis", "--out", DATA / "p.json"),
     }
     found = {}
     for name, cmd in runs.items():
@@ -176,6 +179,7 @@ def part_plot() -> dict:
             f"{name}_plot_adds_mb": with_plot[2] - without[2],
             f"{name}_plot_wall_ratio": with_plot[0] / without[0],
         }
+    found["plot_adds_at_most_100_mb"] = all(found[f"{name}_plot_adds_mb"] <= 100.0 for name in runs)
     return found
 
 
