@@ -24,7 +24,7 @@ import dataclasses
 
 import numpy as np
 
-from gyrocomp.diagnose.effects import DETERMINISTIC, KINDS, PER_RUN, Run, TemperatureScale, design
+from gyrocomp.diagnose.effects import DETERMINISTIC, KINDS, PER_RUN, Run, TemperatureScale, design, effect_columns
 from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 
 __all__ = ["Fitted", "Problem", "fit_baseline", "holdout_fit", "residual_of", "sample_arw"]
@@ -62,7 +62,12 @@ class Fitted:
 
 @dataclasses.dataclass
 class Problem:
-    """A run with its block means, covariance basis and temperature scaling."""
+    """A run with its block means, covariance basis and temperature scaling.
+
+    The block means of a design (:meth:`design_blocks`) and of one effect's
+    columns (:meth:`effect_blocks`) are computed once per shape and kept
+    read-only: the searches ask for the same grid points at every step.
+    """
 
     run: Run
     settings: object
@@ -72,10 +77,25 @@ class Problem:
     def __post_init__(self):
         self.y = block_means(self.run.rate_dps, self.run.n_per_block)
         self.basis = NoiseBasis(self.y.size, self.run.block_s, self.run.block_start_s)
+        self._blocks = {}
 
     def design_blocks(self, spec):
-        X, names = design(self.run, spec, self.poly_degree, self.scale)
-        return block_means(X, self.run.n_per_block), names
+        """Block means of the full-rate design of the baseline plus `spec` (:func:`~gyrocomp.diagnose.effects.design`), and its column names."""
+        key = ("design", _spec_key(spec))
+        if key not in self._blocks:
+            X, names = design(self.run, spec, self.poly_degree, self.scale)
+            self._blocks[key] = (_read_only(block_means(X, self.run.n_per_block)), tuple(names))
+        X, names = self._blocks[key]
+        return X, list(names)
+
+    def effect_blocks(self, effect, params):
+        """Block means of `effect`'s full-rate columns at `params` (:func:`~gyrocomp.diagnose.effects.effect_columns`), and their names."""
+        key = (effect, tuple(sorted(params.items())))
+        if key not in self._blocks:
+            full, names = effect_columns(self.run, effect, params, self.poly_degree, self.scale)
+            self._blocks[key] = (_read_only(block_means(full, self.run.n_per_block)), tuple(names))
+        X, names = self._blocks[key]
+        return X, list(names)
 
     def bic(self, deviance, n_params):
         return deviance + n_params * np.log(self.y.size)
@@ -121,7 +141,16 @@ def residual_of(problem: Problem, model: Fitted):
 
 
 def _key(model: Fitted):
-    return (model.order, tuple(sorted((e, tuple(sorted(p.items()))) for e, p in model.spec.items())))
+    return (model.order, _spec_key(model.spec))
+
+
+def _spec_key(spec: dict):
+    return tuple(sorted((e, tuple(sorted(p.items()))) for e, p in spec.items()))
+
+
+def _read_only(a):
+    a.setflags(write=False)
+    return a
 
 
 def _with_own_noise(problem: Problem, model: Fitted) -> Fitted:

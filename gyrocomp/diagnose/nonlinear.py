@@ -19,8 +19,8 @@ import numpy as np
 from scipy import linalg, optimize
 
 from gyrocomp.diagnose.criterion import Fitted, Problem, _n_params
-from gyrocomp.diagnose.effects import DETERMINISTIC, KINDS, PER_RUN, design, effect_columns, periodic_block_means
-from gyrocomp.effects.likelihood import NoiseModel, block_means, fit_noise, merge_blocks
+from gyrocomp.diagnose.effects import DETERMINISTIC, KINDS, PER_RUN, periodic_block_means
+from gyrocomp.effects.likelihood import NoiseModel, fit_noise, merge_blocks
 from gyrocomp.effects.vocabulary.periodic import harmonic_names
 
 __all__ = ["extend"]
@@ -199,29 +199,27 @@ class _JointPart:
     """One run's whitened block means and fixed columns for a candidate `effect`."""
 
     def __init__(self, problem: Problem, current: Fitted, effect: str):
-        run = problem.run
         self.problem = problem
         self.whitener = problem.basis.whitener(current.noise)
         others = {k: v for k, v in current.spec.items() if k != effect}
-        X, names = design(run, others, problem.poly_degree, problem.scale)
+        X, names = problem.design_blocks(others)
         if effect == "thermal_lag":
             keep = [i for i, n in enumerate(names) if not n.startswith("temperature^")]
             X, names = X[:, keep], [names[i] for i in keep]
         # Whitening is linear: whiten the fixed columns and y once, then only the candidate's.
-        self.base_w = self.whitener.whiten(block_means(X, run.n_per_block))
+        self.base_w = self.whitener.whiten(X)
         self.base_names = names
         self.y_w = self.whitener.whiten(problem.y)
         self.constant = self.whitener.logdet + problem.y.size * np.log(2.0 * np.pi)
 
     def candidate(self, effect, params):
-        run, p = self.problem.run, self.problem
         if effect is None:
             return np.empty((self.y_w.size, 0)), []
         if effect == "periodic":
             harmonics = int(params.get("harmonics", 1))
-            return self.whitener.whiten(periodic_block_means(run, params["period_s"], harmonics)), harmonic_names(harmonics)
-        full, names = effect_columns(run, effect, params, p.poly_degree, p.scale)
-        return self.whitener.whiten(block_means(full, run.n_per_block)), names
+            return self.whitener.whiten(periodic_block_means(self.problem.run, params["period_s"], harmonics)), harmonic_names(harmonics)
+        blocks, names = self.problem.effect_blocks(effect, params)
+        return self.whitener.whiten(blocks), names
 
 
 def _whitened_harmonics(part: _JointPart, periods, h_max) -> list:
@@ -272,11 +270,13 @@ def _periodic_grid_deviances(parts, periods, harmonics=1, whitened=None):
             cw = part.whitener.whiten(cols).reshape(k, n_g, c).transpose(1, 0, 2)  # (G, k, c)
         else:
             cw = np.stack([w[:, :c] for w in whitened[j]])  # (G, k, c)
-        gram[:, c * j : c * j + c, c * j : c * j + c] = np.einsum("gki,gkj->gij", cw, cw)
-        b[:, c * j : c * j + c] = np.einsum("gki,k->gi", cw, y_perp[row : row + k])
-        ucs[:, :, c * j : c * j + c] = np.einsum("kp,gki->gpi", u[row : row + k], cw)
+        # stacked matrix products (BLAS), not einsum: the same sums, an order of magnitude faster
+        cwt = cw.transpose(0, 2, 1)
+        gram[:, c * j : c * j + c, c * j : c * j + c] = cwt @ cw
+        b[:, c * j : c * j + c] = cwt @ y_perp[row : row + k]
+        ucs[:, :, c * j : c * j + c] = u[row : row + k].T @ cw
         row += k
-    a = gram - np.einsum("gpi,gpj->gij", ucs, ucs)
+    a = gram - ucs.transpose(0, 2, 1) @ ucs
     explained = np.einsum("gi,gij,gj->g", b, np.linalg.pinv(a, rcond=1e-12, hermitian=True), b)
     constant = sum(part.constant for part in parts)
     return constant + float(y_perp @ y_perp) - explained

@@ -75,67 +75,21 @@ def two_level_loglik(y, n_iter=50):
     >>> bool(gain[0] > 400.0), bool(abs(gain[1]) < 3.0)
     (True, True)
     """
-    y = np.atleast_2d(np.asarray(y, dtype=float))
+    from gyrocomp.diagnose import _two_level_passes as passes
+
+    y = np.ascontiguousarray(np.atleast_2d(np.asarray(y, dtype=float)))
     center, spread = y.mean(axis=1), np.maximum(y.std(axis=1), 1e-300)
     mu = np.stack([center - spread, center + spread], axis=1)
-    sigma = 0.6 * spread
-    stay = np.full((y.shape[0], 2), 0.9)
-    for _ in range(n_iter):
-        mu, sigma, stay = _em_step(y, mu, sigma, stay, spread)
-    return _forward(y, mu, sigma, stay)[0]
+    return passes.baum_welch(y, mu, 0.6 * spread, np.full((y.shape[0], 2), 0.9), spread, int(n_iter))
 
 
-def _emissions(y, mu, sigma):
-    """Emission densities of the two levels, each block scaled by its larger one (no underflow), and the log scales."""
-    log_em = -0.5 * ((y[:, :, None] - mu[:, None, :]) / sigma[:, None, None]) ** 2 - np.log(sigma)[:, None, None] - 0.5 * _LOG_2PI
-    top = log_em.max(axis=2)
-    return np.exp(log_em - top[:, :, None]), top
+def _forward_loglik(y, mu, sigma, stay):
+    """Log-likelihood of each row of `y` under levels `mu` (m, 2), white `sigma` (m,) and stay probabilities `stay` (m, 2),
+    the chain started in its stationary law: Rabiner's scaled forward pass (compiled, :mod:`gyrocomp.diagnose._two_level_passes`)."""
+    from gyrocomp.diagnose import _two_level_passes as passes
 
-
-def _forward(y, mu, sigma, stay):
-    """Scaled forward pass from the chain's stationary law: log-likelihood, filtered probabilities, scales, emissions.
-
-    Time-major with the two states apart: the loop runs over blocks, each
-    step vectorised over the series.
-    """
-    em, top = _emissions(y, mu, sigma)
-    go = 1.0 - stay
-    start = go[:, ::-1] / np.maximum(go.sum(axis=1, keepdims=True), 1e-300)
-    e0, e1 = em[:, :, 0].T.copy(), em[:, :, 1].T.copy()
-    s0, s1, g0, g1 = stay[:, 0], stay[:, 1], go[:, 0], go[:, 1]
-    n, m = e0.shape
-    a0, a1, scale = np.empty((n, m)), np.empty((n, m)), np.empty((n, m))
-    f0, f1 = start[:, 0] * e0[0], start[:, 1] * e1[0]
-    for i in range(n):
-        if i:
-            f0 = (a0[i - 1] * s0 + a1[i - 1] * g1) * e0[i]
-            f1 = (a0[i - 1] * g0 + a1[i - 1] * s1) * e1[i]
-        scale[i] = f0 + f1
-        a0[i], a1[i] = f0 / scale[i], f1 / scale[i]
-    loglik = np.log(scale).sum(axis=0) + top.sum(axis=1)
-    return loglik, np.stack([a0.T, a1.T], axis=2), scale.T, em
-
-
-def _em_step(y, mu, sigma, stay, spread):
-    """One Baum-Welch iteration: the levels, the white noise's sigma and the stay probabilities re-estimated."""
-    _, alpha, scale, em = _forward(y, mu, sigma, stay)
-    n, m = y.shape[1], y.shape[0]
-    go = 1.0 - stay
-    s0, s1, g0, g1 = stay[:, 0], stay[:, 1], go[:, 0], go[:, 1]
-    b0, b1 = np.ones((n, m)), np.ones((n, m))
-    c0, c1 = (em[:, :, 0] / scale).T, (em[:, :, 1] / scale).T
-    for i in range(n - 2, -1, -1):
-        d0, d1 = b0[i + 1] * c0[i + 1], b1[i + 1] * c1[i + 1]
-        b0[i], b1[i] = s0 * d0 + g0 * d1, g1 * d0 + s1 * d1
-    beta = np.stack([b0.T, b1.T], axis=2)
-    gamma = alpha * beta
-    gamma /= gamma.sum(axis=2, keepdims=True)
-    nxt = beta[:, 1:] * em[:, 1:] / scale[:, 1:, None]
-    kept = alpha[:, :-1] * stay[:, None, :] * nxt
-    stay = np.clip(kept.sum(axis=1) / np.maximum(gamma[:, :-1].sum(axis=1), 1e-300), 1e-4, 1.0 - 1e-4)
-    mu = np.einsum("mnk,mn->mk", gamma, y) / np.maximum(gamma.sum(axis=1), 1e-300)
-    var = np.einsum("mnk,mnk->m", gamma, (y[:, :, None] - mu[:, None, :]) ** 2) / n
-    return mu, np.sqrt(np.maximum(var, 1e-30 * spread**2)), stay
+    y = np.ascontiguousarray(np.atleast_2d(np.asarray(y, dtype=float)))
+    return passes.loglik(y, np.asarray(mu, dtype=float), np.asarray(sigma, dtype=float), np.asarray(stay, dtype=float))
 
 
 def markov_loglik(y, phi, ratio):

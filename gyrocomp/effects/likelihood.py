@@ -45,6 +45,9 @@ References
 ----------
 .. [1] IEEE Std 952-1997, Annex C (Allan variance of the noise terms).
 .. [2] M. S. Keshner, "1/f noise", Proc. IEEE 70(3), 212-218 (1982).
+.. [3] D. Foreman-Mackey, E. Agol, S. Ambikasaran, R. Angus, "Fast and scalable
+   Gaussian process modeling with applications to astronomical time series",
+   Astron. J. 154, 220 (2017).
 """
 
 from __future__ import annotations
@@ -190,8 +193,10 @@ class NoiseBasis:
         earlier = np.minimum.outer(idx, idx)
         self.random_walk = centre[earlier]
         self.random_walk[idx, idx] = start + self.block_s / 3.0
+        self._centre = centre
         self._lag = _block_lags(self.n_blocks, self.block_s, None if starts is None else centre)
-        self.flicker = _flicker_block_covariance(self._lag, self.block_s)
+        self.flicker, self._flicker_tc, flicker_scale = _flicker_block_covariance(self._lag, self.block_s)
+        self._flicker_amplitude = flicker_scale * _markov_amplitude(self.block_s, self._flicker_tc)
         self._markov = {}
         self._eig = {}
 
@@ -235,27 +240,66 @@ class NoiseBasis:
     def whitener(self, noise: NoiseModel):
         """A factorisation of ``Sigma(noise)`` for :func:`profile_deviance`.
 
-        With at most one coloured term, ``Sigma = (N^2 / T_b) I + c C`` shares
-        the eigenvectors of ``C`` (decomposed once per basis), so a new noise
-        model costs O(k) instead of a Cholesky factorisation.
+        With flicker alone or a random walk alone, ``Sigma = (N^2 / T_b) I +
+        c C`` shares the eigenvectors of ``C`` (decomposed once per basis),
+        so a new noise model costs O(k). The bias instability's Markov form
+        (a new ``C`` for every correlation time) and a bias instability
+        beside a random walk are factorised as semiseparable matrices
+        (:meth:`_semiseparable`), in O(k J^2) for ``J`` exponential terms,
+        instead of an O(k^3) eigendecomposition or Cholesky factorisation.
         """
-        colored = [
-            (key, value)
-            for key, value in ((("bias", noise.bias_correlation_s), noise.bias_instability), (("random_walk",), noise.rate_random_walk))
-            if value
-        ]
         white = noise.arw**2 / self.block_s
-        if not colored:
+        if not (noise.bias_instability or noise.rate_random_walk):
             return _Whitener(None, np.full(self.n_blocks, white))
-        if len(colored) == 1:
-            key, value = colored[0]
-            if key not in self._eig:
-                matrix = self.random_walk if key[0] == "random_walk" else self.bias(key[1])
-                self._eig[key] = linalg.eigh(matrix, check_finite=False)
-            lam, q = self._eig[key]
-            return _Whitener(q, white + value**2 * np.maximum(lam, 0.0))
-        # Sigma is symmetric: its transpose is the Fortran-ordered array LAPACK factorises in place.
-        return _Whitener(linalg.cholesky(self.covariance(noise).T, lower=True, overwrite_a=True, check_finite=False), None)
+        if noise.bias_correlation_s or (noise.bias_instability and noise.rate_random_walk):
+            return self._semiseparable(noise)
+        key, matrix, value = (
+            ("flicker", self.flicker, noise.bias_instability)
+            if noise.bias_instability
+            else ("random_walk", self.random_walk, noise.rate_random_walk)
+        )
+        if key not in self._eig:
+            self._eig[key] = linalg.eigh(matrix, check_finite=False)
+        lam, q = self._eig[key]
+        return _Whitener(q, white + value**2 * np.maximum(lam, 0.0))
+
+    def _semiseparable(self, noise: NoiseModel):
+        """The factorisation ``Sigma = L D L'`` (``L`` unit lower) in O(k J^2).
+
+        Below the diagonal every term is a sum of ``U_i V_j exp(-c (t_i - t_j))``
+        over the block centres ``t_i > t_j``: each Gauss-Markov process of
+        the flicker (or the Markov form) is one such term
+        (:func:`_markov_amplitude`), the random walk another (``c = 0``,
+        ``U = K^2``, ``V_j = t_j``, ``min(t_i, t_j) = t_j``). ``Sigma`` is then
+        a semiseparable matrix of rank ``J`` (the terms present) plus its
+        diagonal, which celerite2's solver factorises exactly in O(k J^2)
+        ([3]_, the celerite algorithm) instead of the O(k^3) of a dense
+        Cholesky factorisation; the whitened vectors are the dense lower
+        Cholesky factor's, ``D^(-1/2) L^(-1) v``.
+        """
+        from celerite2 import driver
+
+        b2, k2 = noise.bias_instability**2, noise.rate_random_walk**2
+        rates, amplitudes, diagonal = [], [], noise.arw**2 / self.block_s
+        if b2:
+            if noise.bias_correlation_s:
+                rates.append(1.0 / noise.bias_correlation_s)
+                amplitudes.append(b2 * _markov_amplitude(self.block_s, noise.bias_correlation_s) * (FLICKER_AVAR / MARKOV_PEAK_AVAR))
+            else:
+                rates += list(1.0 / self._flicker_tc)
+                amplitudes += list(b2 * self._flicker_amplitude)
+            diagonal = diagonal + b2 * np.diagonal(self.bias(noise.bias_correlation_s))
+        V = np.ones((self.n_blocks, len(rates) + bool(k2)))
+        if k2:
+            rates.append(0.0)
+            amplitudes.append(k2)
+            V[:, -1] = self._centre
+            diagonal = diagonal + k2 * np.diagonal(self.random_walk)
+        rates = np.array(rates)
+        U = np.empty_like(V)
+        U[:] = amplitudes
+        d, W = driver.factor(self._centre, rates, diagonal, U, V, np.empty(self.n_blocks), np.empty_like(V))
+        return _SemiseparableWhitener(self._centre, rates, U, W, d)
 
 
 def merge_blocks(y, X, basis: NoiseBasis, max_blocks):
@@ -319,6 +363,25 @@ class _Whitener:
             return linalg.solve_triangular(self.q, v, lower=True, check_finite=False)
         v = v if self.q is None else self.q.T @ v
         return v * (self._scale if v.ndim == 1 else self._scale[:, None])
+
+
+class _SemiseparableWhitener:
+    """``whiten(v) = D^(-1/2) L^(-1) v`` from celerite2's factorisation ``Sigma = L D L'`` (:meth:`NoiseBasis._semiseparable`)."""
+
+    d = None  # no eigenbasis to rotate into once (fit_noise_runs)
+
+    def __init__(self, t, rates, U, W, d):
+        self._factor = (t, rates, U, W)
+        self._scale = 1.0 / np.sqrt(d)
+        self.logdet = float(np.sum(np.log(d)))
+
+    def whiten(self, v):
+        from celerite2 import driver
+
+        v = np.asarray(v, dtype=float)
+        columns = np.ascontiguousarray(v.reshape(v.shape[0], -1))
+        out = driver.solve_lower(*self._factor, columns, np.empty_like(columns)) * self._scale[:, None]
+        return out.reshape(v.shape)
 
 
 def fit_noise(y, X, basis: NoiseBasis, start: NoiseModel, free=("arw",)):
@@ -483,6 +546,15 @@ def markov_block_covariance(lag, block_s, correlation_s):
     return np.where(lag == 0, diag, off)
 
 
+def _markov_amplitude(block_s, correlation_s):
+    """``A`` with :func:`markov_block_covariance` ``= A exp(-|t_i - t_j| / T)`` between distinct blocks (centres ``t``).
+
+    ``(1 - e^-a)^2 e^a / a^2 = (2 sinh(a / 2) / a)^2``, ``a = T_b / T``.
+    """
+    a = block_s / np.asarray(correlation_s, dtype=float)
+    return (2.0 * np.sinh(0.5 * a) / a) ** 2
+
+
 def _flicker_block_covariance(lag, block_s, per_decade=3):
     """Block-mean covariance of unit-``B`` flicker at block distances `lag`, as a sum of Gauss-Markov processes.
 
@@ -491,16 +563,26 @@ def _flicker_block_covariance(lag, block_s, per_decade=3):
     ``1 / L`` up (as :func:`gyrocomp.effects.noise.flicker` synthesises it), so
     that flicker does not borrow the random walk's power below ``1 / L``
     (``L`` the span the blocks cover). Each process's block-mean covariance
-    is :func:`markov_block_covariance`.
+    is :func:`markov_block_covariance`, all of one variance.
+
+    Returns
+    -------
+    cov : ndarray, shape (n_blocks, n_blocks)
+    correlation_s : ndarray
+        The processes' time constants ``T`` [s].
+    scale : float
+        `cov` is `scale` times the sum of the processes' unit covariances.
     """
     n_blocks = lag.shape[0]
     length = (float(lag[0, -1]) + 1.0) * block_s
     exponents = np.arange(
         np.floor(per_decade * np.log10(block_s / 10.0)), np.ceil(per_decade * np.log10(length / (2.0 * np.pi))) + 1
     )
+    tcs = 10.0 ** (exponents / per_decade)
     cov = np.zeros((n_blocks, n_blocks))
-    for tc in 10.0 ** (exponents / per_decade):
+    for tc in tcs:
         cov += markov_block_covariance(lag, block_s, tc)
     # Allan variance at T_b: var - cov(lag 1), averaged over the blocks.
     avar = np.mean(np.diag(cov)) - np.mean(np.diag(cov, 1)) if n_blocks > 1 else np.mean(np.diag(cov))
-    return cov * (FLICKER_AVAR / avar)
+    scale = FLICKER_AVAR / avar
+    return cov * scale, tcs, scale

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
-from scipy import stats
+from scipy import linalg, stats
 
 from gyrocomp.effects.likelihood import FLICKER_AVAR, NoiseBasis, NoiseModel, block_means, fit_noise, profile_deviance
 from gyrocomp.effects import noise as sim_noise
@@ -59,6 +59,26 @@ def test_whitener_paths_agree_with_scipy():
         dev, beta = profile_deviance(y, X, basis.whitener(noise))
         ref = -2 * stats.multivariate_normal(X @ beta, basis.covariance(noise)).logpdf(y)
         assert_allclose(dev, ref, rtol=1e-9)
+
+
+@pytest.mark.parametrize("starts", [None, np.cumsum(np.r_[0.0, np.full(39, 20.0), 300.0, np.full(19, 20.0)])])
+@pytest.mark.parametrize("correlation_s", [0.0, 300.0])
+def test_semiseparable_whitener_is_the_dense_cholesky_factor(starts, correlation_s):
+    """celerite2's O(k J^2) factorisation whitens as the dense Cholesky factor of Sigma does (D^-1/2 L^-1 = the
+    lower Cholesky factor's inverse, exactly), with the same log-determinant, on contiguous and gapped blocks:
+    flicker or its Markov form beside a random walk, and the Markov form alone."""
+    rng = np.random.default_rng(5)
+    basis = NoiseBasis(60, 20.0, starts)
+    V = rng.standard_normal((60, 3))
+    for noise in (
+        NoiseModel(arw=0.03, bias_instability=0.004, rate_random_walk=3e-4, bias_correlation_s=correlation_s),
+        NoiseModel(arw=0.03, bias_instability=0.004, bias_correlation_s=correlation_s or 300.0),
+    ):
+        lower = linalg.cholesky(basis.covariance(noise), lower=True)
+        w = basis._semiseparable(noise)
+        assert_allclose(w.whiten(V), linalg.solve_triangular(lower, V, lower=True), rtol=1e-10, atol=1e-10 * np.abs(V).max())
+        assert_allclose(w.whiten(V[:, 0]), linalg.solve_triangular(lower, V[:, 0], lower=True), rtol=1e-10, atol=1e-9)
+        assert_allclose(w.logdet, 2.0 * np.sum(np.log(np.diag(lower))), rtol=1e-12)
 
 
 @pytest.mark.parametrize("starts", [None, np.cumsum(np.r_[0.0, np.full(39, 20.0), 300.0, np.full(19, 20.0)])])

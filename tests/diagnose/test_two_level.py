@@ -65,7 +65,7 @@ def test_forward_likelihood_matches_hmmlearn():
     y = _telegraph(500, 0.05, 2.0, rng) + rng.standard_normal(500)
     stay = np.array([0.93, 0.9])
     go = 1.0 - stay
-    ours = tl._forward(y[None, :], np.array([[-0.8, 1.1]]), np.array([0.9]), stay[None, :])[0][0]
+    ours = tl._forward_loglik(y[None, :], np.array([[-0.8, 1.1]]), np.array([0.9]), stay[None, :])[0]
     peer = _peer(go[::-1] / go.sum(), [[stay[0], go[0]], [go[1], stay[1]]], [-0.8, 1.1], 0.81)
     assert ours == pytest.approx(peer.score(y[:, None]), abs=1e-8)
 
