@@ -67,6 +67,7 @@ from gyrocomp.diagnose import confirm as _confirm
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
 from gyrocomp.diagnose import signature as _signature
+from gyrocomp.diagnose.criterion import _key
 from gyrocomp.diagnose.detectability import detection_limit
 from gyrocomp.diagnose.effects import EFFECTS, effect_params
 from gyrocomp.diagnose.error_rate import error_rate
@@ -173,8 +174,14 @@ def _search(runs: Runs, candidates, start_effects, s: DiagnoseSettings, callback
     (:func:`gyrocomp.diagnose.signature.check`).
     """
 
+    checked = {}
+
     def admissible(problems, model, effect):
-        return _signature.check(effect, problems, model, s).ok
+        # A later move asks again about a trial model already judged (forward, then backward): judge it once.
+        key = (effect, _key(model), model.noise)
+        if key not in checked:
+            checked[key] = _signature.check(effect, problems, model, s).ok
+        return checked[key]
 
     start = _start_model(runs.fit, start_effects)
     return Search(runs.selection, candidates, start=start, admissible=admissible, callback=callback)

@@ -49,6 +49,7 @@ __all__ = [
     "threshold",
     "deterministic_evidence",
     "noise_ratios",
+    "Contrasts",
     "noise_evidence",
     "deterministic_detection",
     "noise_detection",
@@ -96,7 +97,7 @@ def deterministic_evidence(problem, contribution_dps, spec, noise: NoiseModel) -
     return float(r @ r)
 
 
-def noise_ratios(problem, spec, noise: NoiseModel, term: str) -> np.ndarray:
+def noise_ratios(problem, spec, noise: NoiseModel, term: str, contrasts=None) -> np.ndarray:
     """Eigenvalues ``mu_j`` of ``Sigma_0^{-1} Sigma`` for the noise `term` in one run.
 
     Parameters
@@ -108,6 +109,9 @@ def noise_ratios(problem, spec, noise: NoiseModel, term: str) -> np.ndarray:
         The true noise terms, `term` among them.
     term : str
         ``bias_instability`` or ``rate_random_walk``.
+    contrasts : Contrasts, optional
+        ``Contrasts(problem, spec)``, reused by a search over the term's
+        level (its projections and eigendecompositions do not depend on it).
 
     Returns
     -------
@@ -115,36 +119,77 @@ def noise_ratios(problem, spec, noise: NoiseModel, term: str) -> np.ndarray:
     """
     if term not in STOCHASTIC or not getattr(noise, term):
         raise ValueError(f"noise_ratios: {term!r} is not a noise term present in {noise}")
-    X, _ = problem.design_blocks(spec)
-    q, _ = np.linalg.qr(X, mode="complete")
-    contrasts = q[:, X.shape[1] :]
-    basis = problem.basis
-
-    def project(c):
-        return contrasts.T @ c @ contrasts
-
-    true = project(basis.covariance(noise))
-    m = true.shape[0]
+    c = contrasts if contrasts is not None else Contrasts(problem, spec)
+    block_s = problem.basis.block_s
     other = [t for t in STOCHASTIC if t != term and getattr(noise, t)]
     if not other:
         # Sigma_0 = s^2 I on the contrasts: the divergence is least at s^2 = tr(Sigma) / m.
+        true = c.covariance(noise)
         lam = linalg.eigvalsh(true, check_finite=False)
-        return lam / (np.sum(lam) / m)
+        return lam / (np.sum(lam) / true.shape[0])
     # Sigma_0 = a I + b C shares the eigenvectors V of C (eigenvalues c): with
     # d = diag(V' Sigma V) the divergence is sum(d / (a + b c) + ln(a + b c)) + const,
-    # O(m) per trial.
-    c, v = linalg.eigh(project(basis.bias(noise.bias_correlation_s) if other[0] == "bias_instability" else basis.random_walk), check_finite=False)
-    c = np.maximum(c, 0.0)
-    d = np.einsum("ij,ij->j", v, true @ v)
+    # O(m) per trial; V' Sigma V is a sum of the terms' rotated projections.
+    lam_other, rotated = c.rotated(noise, other[0], term)
+    d = np.diagonal(rotated).copy()
+    lam = np.maximum(lam_other, 0.0)
 
     def divergence(z):
-        diag = np.exp(z[0]) / basis.block_s + np.exp(z[1]) * c
+        diag = np.exp(z[0]) / block_s + np.exp(z[1]) * lam
         return float(np.sum(d / diag + np.log(diag)))
 
     start = np.log([noise.arw**2, getattr(noise, other[0]) ** 2])
     best = optimize.minimize(divergence, start, method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-6})
-    sigma0 = (v * (np.exp(best.x[0]) / basis.block_s + np.exp(best.x[1]) * c)) @ v.T
-    return linalg.eigh(true, sigma0, eigvals_only=True, check_finite=False)
+    # The eigenvalues of Sigma_0^-1 Sigma are those of S^-1/2 V' Sigma V S^-1/2, Sigma_0 = V S V'.
+    scale = 1.0 / np.sqrt(np.exp(best.x[0]) / block_s + np.exp(best.x[1]) * lam)
+    return linalg.eigvalsh(rotated * scale[:, None] * scale[None, :], check_finite=False)
+
+
+class Contrasts:
+    """The unit noise covariances of one run projected on the contrasts orthogonal to a design, computed once.
+
+    ``Q' C Q`` for ``Q`` an orthonormal basis of the complement of the
+    design's columns (`problem`'s blocks with the effects of `spec`), for
+    ``C`` the flicker (or its Markov form) and the random walk; and, for a
+    noise term beside the other one, the eigenvectors ``V`` of the other's
+    projection and the term's projection rotated into them, ``V' Q' C Q V``.
+    A noise model's projected covariance is then a sum of these scaled by
+    its levels (:func:`noise_ratios`).
+    """
+
+    def __init__(self, problem, spec):
+        X, _ = problem.design_blocks(spec)
+        q, _ = np.linalg.qr(X, mode="complete")
+        self._q = q[:, X.shape[1] :]
+        self._basis = problem.basis
+        self._projected, self._eig = {}, {}
+
+    def projected(self, term, noise: NoiseModel):
+        """``Q' C Q`` of noise `term` in `noise`'s form (flicker or its Markov form)."""
+        key = (term, noise.bias_correlation_s if term == "bias_instability" else 0.0)
+        if key not in self._projected:
+            unit = self._basis.bias(noise.bias_correlation_s) if term == "bias_instability" else self._basis.random_walk
+            self._projected[key] = self._q.T @ unit @ self._q
+        return self._projected[key]
+
+    def covariance(self, noise: NoiseModel):
+        """``Q' Sigma Q`` of `noise`: ``N^2 / T_b I`` (``Q`` orthonormal) plus each coloured term's projection at its level."""
+        out = np.eye(self._q.shape[1]) * (noise.arw**2 / self._basis.block_s)
+        for term in STOCHASTIC:
+            if getattr(noise, term):
+                out += getattr(noise, term) ** 2 * self.projected(term, noise)
+        return out
+
+    def rotated(self, noise: NoiseModel, other: str, term: str):
+        """The eigenvalues of `other`'s projection and ``V' Q' Sigma Q V`` of `noise` in its eigenvectors ``V``."""
+        key = (other, noise.bias_correlation_s)
+        if key not in self._eig:
+            lam, v = linalg.eigh(self.projected(other, noise), check_finite=False)
+            self._eig[key] = (lam, v, v.T @ self.projected(term, noise) @ v)
+        lam, _, turned = self._eig[key]
+        out = getattr(noise, term) ** 2 * turned
+        out[np.diag_indices_from(out)] += noise.arw**2 / self._basis.block_s + getattr(noise, other) ** 2 * lam
+        return lam, out
 
 
 def noise_evidence(ratios) -> float:
@@ -220,9 +265,11 @@ def detection_limit(runs, model, effect, shape, bic_margin, power=0.95):
     if effect in STOCHASTIC:
         unit = {"bias_instability": np.sqrt(fit.run.block_s), "rate_random_walk": fit.run.block_s}[effect]
 
+        contrasts = Contrasts(fit, spec)
+
         def shortfall(z):
             trial = dataclasses.replace(noise, **{effect: noise.arw / unit * np.exp(z)})
-            return noise_detection(np.tile(noise_ratios(fit, spec, trial, effect), len(runs)), thr) - power
+            return noise_detection(np.tile(noise_ratios(fit, spec, trial, effect, contrasts), len(runs)), thr) - power
 
         if shortfall(np.log(1e3)) < 0:
             return None
