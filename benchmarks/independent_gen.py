@@ -584,8 +584,21 @@ def chamber(profile, duration_s):
     return ramp_soak(p["low_c"], p["high_c"], p["room_c"], p["ramp_c_per_min"], p["first_soak_s"], duration_s, p["heat_first"])
 
 
-def generate_pair(case, cfg=None):
+EXTREME_BRANCH = 1.5
+"""A power-on state beyond either end of ``initial_branch``: every relay of a spread on one branch (its threshold
+comparison is strict at 1), a play clamped at its end, a relay on the branch of its sign."""
+
+
+def generate_pair(case, cfg=None, power_on_oracle=False):
     """The fit and holdout recordings of a case, and what was realised.
+
+    With `power_on_oracle`, a hysteresis case's `realised` also holds
+    ``power_on_unknown_dps``: on the holdout, the effect less the same effect
+    started midway between its two extreme power-on branches (the mean of the
+    two). It is what a compensator that knows the form, its width and its
+    amplitude exactly, but not the branch the part powered on in, still leaves
+    (the midway start is its least-squares guess when the branch is equally
+    likely either way): no feed-forward model of the temperature can remove it.
 
     Returns
     -------
@@ -642,6 +655,10 @@ def generate_pair(case, cfg=None):
         rate = g["offset_dps"] + g["turn_on_dps"][i] + bias[role] + s.rng.standard_normal(s.t.size) * sigma * scale[role]
         lsb = cfg["gyro"]["rate_lsb_fraction"] * sigma
         runs[role] = {"time": s.t, "rate": np.round(rate / lsb) * lsb, "temperature": measured[role]}
+    if power_on_oracle and form is not None and form.kind == "shape" and "initial" in case["params"]:
+        extremes = [form.make(states["holdout"], {**case["params"], "initial": {**case["params"]["initial"], "holdout": branch}})
+                    for branch in (-EXTREME_BRANCH, EXTREME_BRANCH)]
+        realised["power_on_unknown_dps"] = realised["amplitude"] * (made["holdout"] - 0.5 * (extremes[0] + extremes[1]))
     return runs, realised
 
 

@@ -148,6 +148,43 @@ def advance(time_s, temperature_c, state, tau_e, tau_r, half_width, relay, tau_e
         out[i, 4] = (x - state[10]) / half_width2 if half_width2 > 0.0 else 0.0
 
 
+@numba.njit(cache=True, error_model="numpy")
+def play_start_spread(x, restart, half_width, out):
+    """What an unknown power-on state adds to a play's output: the play started on either branch less the play
+    started centred (the model's start, :func:`advance`), into `out` (n, 2).
+
+    Column 0 is the play started at ``p = x_0 - w / 2`` (output +1, the
+    heating branch), column 1 at ``p = x_0 + w / 2`` (output -1), each less
+    the centred play. Both are 0 once the input has moved a whole width one
+    way (the three plays then agree), and while no play is clamped they are
+    the constants +1 and -1. A start in between is, within a quarter of the
+    amplitude, a weighted sum of the two (exact at either branch, and while
+    no play is clamped): the start is unknown, so a fit takes both columns
+    with free coefficients rather than the one constant that holds only
+    while the temperature stays within the play.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n,)
+        The play's input (T or ``T_e``) [degC].
+    restart : ndarray of bool, shape (n,)
+        Samples at which the play restarts centred (the first; after a gap, when gaps are not bridged).
+    half_width : float
+        Half the play's width [degC] (> 0).
+    out : ndarray, shape (n, 2)
+    """
+    high = low = centre = 0.0
+    for i in range(x.shape[0]):
+        v = x[i]
+        if restart[i]:
+            high, low, centre = v - half_width, v + half_width, v
+        high = min(max(high, v - half_width), v + half_width)
+        low = min(max(low, v - half_width), v + half_width)
+        centre = min(max(centre, v - half_width), v + half_width)
+        out[i, 0] = (centre - high) / half_width
+        out[i, 1] = (centre - low) / half_width
+
+
 def new_state() -> np.ndarray:
     """A cold state (:func:`advance`)."""
     return np.zeros(N_STATE)

@@ -102,12 +102,6 @@ class Prepared:
             out[s] = kernel(self.time_s[s], self.temperature_c[s], state, spec)
         return out
 
-    def power_on_column(self, width: float) -> np.ndarray:
-        """1 before the first excursion beyond the play of the power-on temperature (unknown branch), else 0."""
-        beyond = np.flatnonzero(np.abs(self.temperature_c - self.temperature_c[0]) > width)
-        first = beyond[0] if beyond.size else self.temperature_c.size
-        return (np.arange(self.temperature_c.size) < first).astype(float)
-
     def ranges(self, model, spec: Spec) -> tuple:
         raw = self.raw(spec, model.bridge_gaps)
         element = raw[:, element_column(spec)]
@@ -145,11 +139,8 @@ class Search:
             power_on = run.run.power_on_s if run.run.power_on_s is not None else run.time_s[0]
             cols = columns_of(self._raw_of(i, spec), run.time_s, spec, power_on, m.centre_c_, m.half_range_c_, m.degree)
             per_run = {f"offset_{j}": np.full(run.time_s.size, float(j == i)) for j in range(n_runs)}
-            if spec.width:
-                unknown = run.power_on_column(max(spec.width, spec.width2) if not spec.relay else spec.width2)
-                if spec.relay:
-                    unknown = np.maximum(unknown, self._raw_of(i, spec)[:, 2] == 0.0)
-                per_run |= {f"power_on_{j}": unknown * (j == i) for j in range(n_runs)}
+            for name, column in self._power_on_of(i, spec).items():
+                per_run |= {f"{name}_{j}": column * (j == i) for j in range(n_runs)}
             columns = per_run | cols
             names = list(columns)
             X = np.column_stack(list(columns.values()))
@@ -213,7 +204,10 @@ class Search:
     def identified(self, spec: Spec, trial: Spec, term: str):
         """None when the runs identify `term` at `trial` beside the columns of `spec`, else the :class:`Refusal`.
 
-        The columns judged are those `term` adds; for the thermal lag, which
+        The columns judged are those `term` adds, beside those of `spec` as
+        `trial` holds them (a second play is judged beside the first at the
+        width the trial gives it) and the trial's power-on columns, a nuisance
+        never judged itself; for the thermal lag, which
         replaces T by T_e in the cubic, the difference ``T_e - T``; for the
         saturation, which replaces dT/dt by ``s tanh(dT/dt / s)``, their difference.
         """
@@ -225,7 +219,10 @@ class Search:
                 f"{term} not fitted: the temperature never reverses by more than {width:.3g} degC after its first excursion "
                 "on the training runs, so the branch never changes and the play is a function of T alone; add a run that heats and cools",
             )
-        base = self._stacked(spec)
+        stacked = self._stacked(trial)
+        # The unknown power-on state's columns are a nuisance of the trial: part of what the term is judged beside,
+        # never judged themselves (two plays' columns overlap; least squares takes them as they come).
+        base = self._stacked(spec) | {n: c for n, c in stacked.items() if n.startswith("power_on")}
         if term == "thermal_lag":
             lag = [block_means(self._raw_of(i, trial)[:, 0] - r.temperature_c, r.block_of, r.n_blocks) for i, r in enumerate(self.runs)]
             added = {"thermal_lag (T_e - T)": np.concatenate(lag)}
@@ -234,12 +231,41 @@ class Search:
                      for i, r in enumerate(self.runs)]
             added = {"second_lag (T_e2 - T_e, in series)": np.concatenate(stage)}
         elif term == "rate_saturation":  # the saturated dT/dt replaces the linear one: judge what it adds
-            saturated = self._stacked(trial)
-            added = {f"rate_saturation ({n}: saturated less linear)": saturated[n] - base[n] for n in ("rate", "rate_abs") if n in base}
-        else:
-            added = {f"{term} ({n})": c for n, c in self._stacked(trial).items() if n not in base}
+            added = {f"rate_saturation ({n}: saturated less linear)": stacked[n] - base[n] for n in ("rate", "rate_abs") if n in base}
+        else:  # beside the others as the trial holds them (a second play re-searches the first play's width too)
+            added = {f"{term} ({n})": c for n, c in stacked.items() if n not in base}
+            base = {n: stacked.get(n, c) for n, c in base.items()}
         _, refused = separable({**base, **added}, self.model.min_unique_variance)
         return next((r for r in refused if r.term in added), None)
+
+    def _power_on_of(self, i: int, spec: Spec) -> dict:
+        """Columns of run `i` spanning what the hysteresis' unknown state at power-on adds (free per run).
+
+        A relay: 1 until its first switch (before it, its output is 0 and the
+        branch is +1 or -1, a constant). A play (and a second play): its start
+        on either branch less its centred start
+        (:func:`~gyrocomp.effects._stateful.play_start_spread`): not a
+        constant, since a play started on a branch follows the temperature at
+        once while the centred one waits for half the width.
+        """
+        from gyrocomp.effects._stateful import play_start_spread
+
+        key = ("power_on", i, spec.tau_e, spec.width, spec.relay, spec.width2, spec.on_element)
+        if key not in self._raw:
+            raw, run = self._raw_of(i, spec), self.runs[i]
+            x = raw[:, 0] if spec.on_element and spec.tau_e else run.temperature_c
+            restart = np.zeros(x.size, dtype=bool)
+            restart[[s.start for s in (run.segments if not self.model.bridge_gaps else run.segments[:1])]] = True
+            columns = {}
+            if spec.width and spec.relay:
+                columns["power_on"] = (raw[:, 2] == 0.0).astype(float)
+            for name, width in (("power_on_play", 0.0 if spec.relay else spec.width), ("power_on_play2", spec.width2 if spec.width else 0.0)):
+                if width:
+                    spread = np.empty((x.size, 2))
+                    play_start_spread(x, restart, 0.5 * width, spread)
+                    columns |= {f"{name}_high": spread[:, 0], f"{name}_low": spread[:, 1]}
+            self._raw[key] = columns
+        return self._raw[key]
 
     def _raw_of(self, i: int, spec: Spec) -> np.ndarray:
         key = (i, spec.tau_e, spec.width, spec.tau_r, spec.relay, spec.tau_e2, spec.series, spec.width2, spec.on_element)

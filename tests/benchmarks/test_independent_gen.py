@@ -198,6 +198,30 @@ def test_profiles_differ_overlap_and_reverse():
             assert_allclose(r["temperature"] / lsb, np.round(r["temperature"] / lsb), atol=1e-6)
 
 
+@pytest.mark.parametrize("key", ["hysteresis/play_operator", "hysteresis/two_branch_relay", "hysteresis/preisach_width_spread"])
+def test_the_power_on_oracle_is_the_branch_at_power_on_until_every_start_agrees(key):
+    """At power-on the effect less its midway start is the amplitude times the start itself (a play's output, the
+    relay's branch, the mean of the relays' branches); once the temperature has swept the widest width both ways,
+    every start agrees and nothing is left."""
+    case = gen.draw_case(5, 2, key, fs_hz=1.0, duration_s=8 * 3600.0)
+    runs, realised = gen.generate_pair(case, power_on_oracle=True)
+    unknown, a = realised["power_on_unknown_dps"], realised["amplitude"]
+    start = case["params"]["initial"]["holdout"]
+    widest = max(case["params"].get(k, 0.0) for k in ("width_c", "narrowest_c", "widest_c"))
+    if key.endswith("relay"):
+        start = 1.0 if start >= 0 else -1.0
+    elif key.endswith("spread"):  # the relays below `start` on a linear scale from -1 to 1 are up
+        up = np.linspace(-1, 1, case["params"]["relays"]) < start
+        start = float(np.mean(np.where(up, 1.0, -1.0)))
+    assert unknown[0] == pytest.approx(a * start, abs=1e-12)
+    t = runs["holdout"]["time"]
+    T = gen.first_order_lag(np.interp(t, *gen.chamber(case["profiles"]["holdout"], case["duration_s"])), t, case["gyro"]["housing_tau_s"])
+    swept = np.flatnonzero((np.maximum.accumulate(T) - T > 2 * widest) & (T - np.minimum.accumulate(T) > 2 * widest))
+    assert swept.size and np.all(unknown[swept[0]:] == 0.0)
+    _, plain = gen.generate_pair(case)
+    assert "power_on_unknown_dps" not in plain
+
+
 def test_same_case_same_bytes_other_seed_other_noise():
     case = gen.draw_case(5, 2, "hysteresis/play_operator", fs_hz=1.0, duration_s=7200.0)
     a, _ = gen.generate_pair(case)

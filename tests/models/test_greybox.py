@@ -62,7 +62,7 @@ def _relay(T, width, start=1.0):
 
 def _gyro(t, T, seed, *, tau_e=400.0, rate=1.5, asym=0.5, play=0.01, width=4.0, warm=0.03, tau_w=900.0, rrw=2e-6,
           relay=0.0, lag2=0.0, tau_e2=3000.0, warm2=0.0, tau_w2=4000.0, sat=0.0, series=False, play2=0.0, width2=12.0,
-          on_element=False):
+          on_element=False, play_start=0.0):
     rng = np.random.default_rng(seed)
     Te = _lag(t, T, tau_e)
     if series:  # the die behind a second stage: the cubic of the lag of T_e
@@ -75,7 +75,7 @@ def _gyro(t, T, seed, *, tau_e=400.0, rate=1.5, asym=0.5, play=0.01, width=4.0, 
     bias += rate * r + asym * np.abs(r)
     x = Te if on_element else T  # what the hysteresis switches on
     for amplitude, w in ((play, width), (play2, width2)):
-        p, out = x[0], np.empty_like(x)
+        p, out = x[0] - play_start * w / 2, np.empty_like(x)  # play_start: the output at power-on, -1 to 1
         for i in range(x.size):
             p = min(max(p, x[i] - w / 2), x[i] + w / 2)
             out[i] = (x[i] - p) / (w / 2)
@@ -202,16 +202,22 @@ def test_a_second_time_constant_is_not_fitted_where_its_first_cannot_be():
 
 
 def test_all_terms_together_are_selected_and_recovered(cycle_model):
-    """Within 10 %, but the warm-up's time constant within 20 %: the causal dT/dt (a 30 s filter) and the
-    generator's central differences differ at the ramps' corners, and that misfit, read as slow noise, widens
-    the warm-up's spread (775 and 868-937 s on two seeds; 894-906 s alone, above)."""
+    """Within 10 %, but the warm-up within 20 %: the causal dT/dt (a 10 s filter) and the generator's central
+    differences differ at the ramps' corners, and the first corner (1800 s) falls in the warm-up's tail. That
+    misfit widens the warm-up's spread (775 and 868-937 s on two seeds; 894-906 s alone, above), and on this
+    seed a second warm-up time constant takes it (518 and 1259 s, 0.016 deg/s each): the transient is
+    checked as a whole, its value at power-on and its area. Until the play's unknown power-on state had two
+    columns (2026-11-27), one constant until the first 4 degC excursion took that misfit instead."""
     m = cycle_model
-    assert sorted(s["term"] for s in m.selection_) == sorted(["thermal_lag", "temp_rate", "hysteresis", "warmup"])
+    assert {"thermal_lag", "temp_rate", "hysteresis", "warmup"} <= {s["term"] for s in m.selection_} <= {
+        "thermal_lag", "temp_rate", "hysteresis", "warmup", "second_warmup"}
     assert m.spec_["rate_form"] == 2 and m.not_fitted_ == []
     assert m.spec_["tau_e_s"] == pytest.approx(TRUTH["tau_e"], rel=0.1)
     assert m.spec_["width_c"] == pytest.approx(TRUTH["width"], rel=0.1)
-    assert m.spec_["tau_w_s"] == pytest.approx(TRUTH["tau_w"], rel=0.2)
-    for name, key in (("rate", "rate"), ("rate_abs", "asym"), ("play", "play"), ("warmup", "warm")):
+    warmups = [(m.coef_["warmup"], m.spec_["tau_w_s"]), (m.coef_.get("warmup2", 0.0), m.spec_["tau_w2_s"])]
+    assert sum(a for a, _ in warmups) == pytest.approx(TRUTH["warm"], rel=0.1)
+    assert sum(a * tau for a, tau in warmups) == pytest.approx(TRUTH["warm"] * TRUTH["tau_w"], rel=0.2)
+    for name, key in (("rate", "rate"), ("rate_abs", "asym"), ("play", "play")):
         assert m.coef_[name] == pytest.approx(TRUTH[key], rel=0.1), name
     assert m.coef_about_reference_[1] == pytest.approx(2e-3, rel=0.1)  # the cubic about T_ref = 25 degC
 
@@ -275,6 +281,43 @@ def test_heating_and_cooling_apart_is_refused_on_runs_of_one_direction(direction
 
 def test_heating_and_cooling_apart_is_not_refused_where_the_runs_heat_and_cool(cycle_model):
     assert cycle_model.spec_["rate_form"] == 2 and cycle_model.not_fitted_ == []
+
+
+@pytest.mark.parametrize("start", [0.9, -0.9, 0.4])
+def test_a_play_that_powers_on_off_centre_is_recovered_within_5_percent(start):
+    """The training run's power-on state is unknown: a play started near a branch follows the temperature at once,
+    where the model's centred play waits half the width. With one constant for the samples before the first
+    excursion (until 2026-11-27), the misfit after it read as a random walk (8.5e-5 deg/s/sqrt(s) for a start at
+    -0.9) and the amplitude came out 22 % low (start 0.9); with the columns of both branches' starts it is
+    within 5 %."""
+    t = np.arange(0, 21600.0)
+    T = _chamber(t, *CYCLE)
+    y, _ = _gyro(t, T, 5, tau_e=0.0, rate=0.0, asym=0.0, warm=0.0, play=0.02, width=6.0, play_start=start)
+    m = GreyBoxDrift(grid_points=12, terms=("hysteresis",)).fit([_run(t, T, y, "cycle")])
+    assert m.spec_["width_c"] == pytest.approx(6.0, rel=0.05)
+    assert m.coef_["play"] == pytest.approx(0.02, rel=0.05)
+    assert m.noise_["rate_random_walk"] < 2e-6  # the truth has none: no misfit left for it
+
+
+def test_the_power_on_columns_are_a_play_started_on_either_branch_less_the_centred_play():
+    from gyrocomp.effects._stateful import play_start_spread
+
+    x = np.array([20.0, 20.5, 21.0, 22.0, 23.0, 22.0, 20.0, 25.0])
+    restart = np.zeros(x.size, dtype=bool)
+    restart[0] = True
+    out = np.empty((x.size, 2))
+    play_start_spread(x, restart, 1.5, out)
+
+    def play(p):  # by its definition: p held within 1.5 degC of x
+        values = []
+        for v in x:
+            p = min(max(p, v - 1.5), v + 1.5)
+            values.append((v - p) / 1.5)
+        return np.array(values)
+
+    np.testing.assert_allclose(out[:, 0], play(18.5) - play(20.0), atol=1e-12)
+    np.testing.assert_allclose(out[:, 1], play(21.5) - play(20.0), atol=1e-12)
+    assert out[0].tolist() == [1.0, -1.0] and np.all(out[4:] == 0.0)  # 3 degC one way: every start agrees
 
 
 def test_a_hysteresis_whose_branch_never_changes_is_refused():
