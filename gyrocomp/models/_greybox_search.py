@@ -126,7 +126,8 @@ class Search:
         self.runs = runs
         self.bases = [NoiseBasis(r.n_blocks, r.block_s, r.starts) for r in runs]
         self.n_blocks = sum(r.n_blocks for r in runs)
-        self._raw = {}
+        self._raw = {}  # the kernel's columns of each run, by the states' parameters
+        self._power_on = {}  # the power-on columns of each run, by the hysteresis' parameters
         self._whiteners = ((), [])  # the last noise levels' factorisations: the trials of a round share them
 
     # design ---------------------------------------------------------------
@@ -250,8 +251,8 @@ class Search:
         """
         from gyrocomp.effects._stateful import play_start_spread
 
-        key = ("power_on", i, spec.tau_e, spec.width, spec.relay, spec.width2, spec.on_element)
-        if key not in self._raw:
+        key = (i, spec.tau_e, spec.width, spec.relay, spec.width2, spec.on_element)
+        if key not in self._power_on:
             raw, run = self._raw_of(i, spec), self.runs[i]
             x = raw[:, 0] if spec.on_element and spec.tau_e else run.temperature_c
             restart = np.zeros(x.size, dtype=bool)
@@ -264,8 +265,8 @@ class Search:
                     spread = np.empty((x.size, 2))
                     play_start_spread(x, restart, 0.5 * width, spread)
                     columns |= {f"{name}_high": spread[:, 0], f"{name}_low": spread[:, 1]}
-            self._raw[key] = columns
-        return self._raw[key]
+            self._power_on[key] = columns
+        return self._power_on[key]
 
     def _raw_of(self, i: int, spec: Spec) -> np.ndarray:
         key = (i, spec.tau_e, spec.width, spec.tau_r, spec.relay, spec.tau_e2, spec.series, spec.width2, spec.on_element)
