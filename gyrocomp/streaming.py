@@ -81,7 +81,19 @@ class ChunkReader:
         (None for CSV): the most samples a reading can give.
     """
 
-    def __init__(self, path, columns: ColumnSpec, *, rows: int, require_temperature: bool, usecols, jitter_tolerance: float, gaps: bool = False, first_rows: int | None = None):
+    def __init__(
+        self,
+        path,
+        columns: ColumnSpec,
+        *,
+        rows: int,
+        require_temperature: bool,
+        usecols,
+        jitter_tolerance: float,
+        gaps: bool = False,
+        first_rows: int | None = None,
+        writable: bool = True,
+    ):
         self.name = "-" if str(path) == "-" else os.fspath(path)
         self.columns = columns
         self.rows = int(rows)
@@ -90,6 +102,7 @@ class ChunkReader:
         self.usecols = None if usecols is None else list(dict.fromkeys(usecols))
         self.jitter_tolerance = jitter_tolerance
         self.gaps = bool(gaps)
+        self.writable = bool(writable)
         self.breaks = []
         self._noted = False
         self.fs_hz = None
@@ -134,6 +147,7 @@ class ChunkReader:
                 allow_gaps=True,
                 _where=(where, first + self.n_samples),
                 _owned=True,
+                _views=not self.writable,
                 _gap_note=not self.gaps,
                 _interval=nominal,
                 _open_ends=(goes_on, True),
@@ -295,6 +309,7 @@ def read_chunks(
     jitter_tolerance: float = 0.5,
     gaps: bool = False,
     first_rows: int | None = None,
+    writable: bool = True,
 ) -> ChunkReader:
     """A recording as an iterable of validated chunks of `rows` samples.
 
@@ -319,6 +334,11 @@ def read_chunks(
     first_rows : int, optional
         Samples of the first chunk of a Parquet file, from which the sample
         rate is estimated (default `rows`; CSV chunks are all `rows` long).
+    writable : bool
+        False lets a chunk's time and axes be views of the arrays decoded
+        from the file (which may be read-only), not copies of them: for a
+        caller that only reads the chunks (``allan``: 0.07-0.09 s of CPU
+        less on 10^7 samples).
 
     Returns
     -------
@@ -328,7 +348,10 @@ def read_chunks(
     """
     if min(rows, rows if first_rows is None else first_rows) < 2:
         raise InputError(f"chunks of {rows} rows (the first {first_rows}); need at least 2")
-    return ChunkReader(path, columns, rows=rows, require_temperature=require_temperature, usecols=usecols, jitter_tolerance=jitter_tolerance, gaps=gaps, first_rows=first_rows)
+    return ChunkReader(
+        path, columns, rows=rows, require_temperature=require_temperature, usecols=usecols, jitter_tolerance=jitter_tolerance, gaps=gaps,
+        first_rows=first_rows, writable=writable,
+    )
 
 
 class TableWriter:

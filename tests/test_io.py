@@ -79,6 +79,27 @@ def test_sha256_on_a_thread_is_the_file_sha256(tmp_path):
         artefacts.file_sha256_started(tmp_path / "gone.parquet")
 
 
+def test_chunks_read_only_are_the_chunks_without_their_copies(tmp_path):
+    """``writable=False`` hands out views of the decoded row groups, with the values and checks of the copies."""
+    from gyrocomp import streaming
+
+    path = tmp_path / "r.parquet"
+    frame = pd.DataFrame({"time": np.arange(5000) / 10.0, "rate": np.random.default_rng(6).normal(size=5000)})
+    frame.to_parquet(path, row_group_size=2000)
+    copies = list(streaming.read_chunks(path, rows=1000))
+    views = list(streaming.read_chunks(path, rows=1000, writable=False))
+    assert copies[0].rate_dps.base is None and copies[1].time_s.base is None  # copied out of the row group
+    assert views[0].rate_dps.base is views[1].rate_dps.base is not None  # the first row group's 2000 rates
+    assert views[0].time_s.base is views[1].time_s.base is not None
+    for a, b in zip(copies, views, strict=True):
+        np.testing.assert_array_equal(a.rate_dps, b.rate_dps)
+        np.testing.assert_array_equal(a.time_s, b.time_s)
+    frame.loc[3500, "rate"] = np.nan
+    frame.to_parquet(path, row_group_size=2000)
+    with pytest.raises(InputError, match="row 3501: `rate` is missing or NaN"):
+        list(streaming.read_chunks(path, rows=1000, writable=False))
+
+
 @pytest.mark.parametrize(
     "text, expected",
     [

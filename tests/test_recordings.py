@@ -326,6 +326,8 @@ def test_checks_in_chunks_name_the_row_past_the_first_chunk(at):
         return str(err.value)
 
     assert refused("rate", np.nan).startswith(f"long row {at + 1}: `rate` is missing or NaN")
+    assert refused("rate", -np.inf).startswith(f"long row {at + 1}: `rate` is -inf")
+    assert refused("time", np.inf).startswith(f"long row {at + 1}: `time` is inf")
     assert refused("rate", 2e5).startswith(f"long row {at + 1}: `rate` = 200000 deg/s is beyond")
     assert refused("temperature", 300.0).startswith(f"long row {at + 1}: `temperature` = 300 degC is outside")
     assert refused("time", base["time"][at - 1] - 1.0).startswith(f"long row {at + 1}: `time` = ")
@@ -370,3 +372,26 @@ def test_median_interval_of_a_long_axis_is_numpys_without_the_intervals(monkeypa
     for name, time in axes.items():
         expected = np.median(np.diff(time))
         assert recordings.median_interval(time) == expected, name
+
+
+def test_interval_range_is_the_least_and_largest_interval(monkeypatch):
+    """The one pass that clears a regular time axis gives ``np.diff``'s min and max, NaN for a NaN interval, across its blocks."""
+    monkeypatch.setattr(timebase, "_CHECK_ROWS", 1000)
+    rng = np.random.default_rng(38)
+    time = np.cumsum(rng.uniform(0.5, 1.5, 10_001))
+    time[7_500:] += 3.0  # a gap in the eighth block
+    assert timebase.interval_range(time) == (np.diff(time).min(), np.diff(time).max())
+    time[2_000] = time[1_999]  # a duplicate on a block's edge
+    assert timebase.interval_range(time)[0] == 0.0
+    time[9_000] = np.nan
+    assert all(math.isnan(v) for v in timebase.interval_range(time))
+    assert timebase.interval_range(np.array([1.0])) == (math.inf, -math.inf)
+
+
+def test_an_extra_column_of_infinities_is_kept_and_one_with_a_nan_dropped():
+    """A further column is kept when every cell is a number, infinities included (their sum is NaN, as a NaN's is)."""
+    n = 1000
+    arrays = {"time": np.arange(n) / 100.0, "rate": np.zeros(n), "both": np.r_[np.inf, -np.inf, np.ones(n - 2)], "hole": np.r_[np.ones(n - 1), np.nan]}
+    rec = recordings.recording_from_frame(arrays, name="extra")
+    assert "hole" not in rec.columns
+    np.testing.assert_array_equal(rec.column("both"), arrays["both"])

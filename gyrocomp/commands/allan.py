@@ -176,7 +176,7 @@ def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, li
     from gyrocomp.errors import InputError
 
     column = options.column
-    reader = streaming.read_chunks(path, options.columns, usecols=usecols, gaps=True)
+    reader = streaming.read_chunks(path, options.columns, usecols=usecols, gaps=True, writable=False)  # the chunks are only read
     reading = iter(reader)
     head = next(reading)  # the axes and columns, from the first chunk of the first reading, which goes on
     first = [itertools.chain([head], reading)]

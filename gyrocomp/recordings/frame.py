@@ -11,6 +11,7 @@ time base (:mod:`gyrocomp.recordings.timebase`). Each refuses with one
 from __future__ import annotations
 
 import contextlib
+import math
 import warnings
 from typing import TYPE_CHECKING, Callable, Mapping, Sequence
 
@@ -21,7 +22,7 @@ from gyrocomp.columns import matching_columns
 from gyrocomp.errors import InputError, RecordingNote
 from gyrocomp.recordings.recording import Recording
 from gyrocomp.recordings.spec import ACCELERATION_UNITS, PLAUSIBLE_DEGC, RATE_UNITS, TIME_UNITS, AxisLimits, Channel, ColumnSpec, TimeLimits
-from gyrocomp.recordings.timebase import _CHECK_ROWS, _check_order, _check_time_base, _segments, median_interval
+from gyrocomp.recordings.timebase import _CHECK_ROWS, _check_order, _check_time_base, _segments, interval_range, median_interval
 
 if TYPE_CHECKING:  # pandas is imported where a function needs it: the Parquet path of a recording never does
     import pandas as pd
@@ -41,6 +42,7 @@ def recording_from_frame(
     limits: TimeLimits = TimeLimits(),
     _where: tuple[str, int] = ("row", 1),
     _owned: bool = False,
+    _views: bool = False,
     _gap_note: bool = True,
     _interval: float | None = None,
     _open_ends: tuple[bool, bool] = (False, False),
@@ -52,7 +54,10 @@ def recording_from_frame(
     integer or float NumPy array (validated without importing pandas).
     `sha256` defaults to the hash of the table's CSV form. Time and axes are
     copies (the private `_owned` says `frame` is a throw-away of
-    :func:`read_recording`, whose own columns are then reused). The private
+    :func:`read_recording`, whose own columns are then reused; the private
+    `_views` keeps them as the views of `frame` they are, read-only ones
+    too: a chunk its reader's caller only reads,
+    :func:`gyrocomp.streaming.read_chunks` with ``writable=False``). The private
     `_gap_note` false leaves the note on gaps out: a chunk of a file whose
     reader reports the gaps of the whole file once (:mod:`gyrocomp.streaming`).
     The private `_interval` is the sampling interval [s] of the stream a
@@ -84,13 +89,13 @@ def recording_from_frame(
     if n_rows == 0:
         raise InputError(f"{name}: has a header but no data rows")
     chosen = _select_columns(names, columns, name, require_temperature)
-    time, origin = _time_seconds(frame[columns.time], columns, locate, _owned)
+    time, origin = _time_seconds(frame[columns.time], columns, locate, _owned, _views)
     out = {"time": time}
     axes = []
     for (src, unit) in chosen["axes"]:
         quantity, canonical, factor = _unit_of(unit)
         values = _numeric_column(frame[src], src, locate)
-        out[src] = _own(values, _owned) if factor == 1.0 else values * factor
+        out[src] = _own(values, _owned, _views) if factor == 1.0 else values * factor
         _check_axis(out[src], src, canonical, unit, factor, locate)
         axes.append(Channel(src, src, quantity, canonical, unit))
     temperatures = []
@@ -109,14 +114,19 @@ def recording_from_frame(
     n = len(out["time"])
     if n < min_samples:
         raise InputError(f"{name}: {n} samples, this command needs at least {min_samples}")
-    out, rows, notes = _check_order(out, columns, locate)
+    intervals = interval_range(out["time"])
+    out, rows, notes = _check_order(out, columns, locate, intervals)
     n = len(out["time"])
     if n < min_samples:
         raise InputError(f"{name}: {n} samples once duplicates are merged, this command needs at least {min_samples}")
+    if rows is not None:  # rows merged: other intervals
+        intervals = interval_range(out["time"])
     nominal = median_interval(out["time"]) if _interval is None else _interval
     if columns.time_unit is None and origin is None and _interval is None:  # numbers read as seconds, not datetimes
         _check_time_base(out["time"], nominal, columns.time, name, limits)
-    out, segments, filled = _segments(out, nominal, columns.time, locate, jitter_tolerance, resample, allow_gaps, _open_ends, _first_segment)
+    out, segments, filled = _segments(
+        out, nominal, columns.time, locate, jitter_tolerance, resample, allow_gaps, _open_ends, _first_segment, intervals
+    )
     if _gap_note or len(segments) == 1:
         notes.extend(filled)
     for note in notes:
@@ -177,7 +187,7 @@ def _unit_of(unit: str) -> tuple[str, str, float]:
     return "acceleration", "m/s^2", ACCELERATION_UNITS[unit]
 
 
-def _time_seconds(series, spec: ColumnSpec, locate, owned: bool) -> tuple[np.ndarray, str | None]:
+def _time_seconds(series, spec: ColumnSpec, locate, owned: bool, views: bool = False) -> tuple[np.ndarray, str | None]:
     """The time column in seconds, and what its 0 is when it was converted.
 
     Seconds are kept as they are (origin None). Any other unit becomes
@@ -196,7 +206,7 @@ def _time_seconds(series, spec: ColumnSpec, locate, owned: bool) -> tuple[np.nda
         return _signed_difference(raw, start).astype(float) * factor, f"{int(start)} {unit}"
     values = _numeric_column(series, spec.time, locate)
     if factor == 1.0:
-        return _own(values, owned), None
+        return _own(values, owned, views), None
     start = float(values[0])
     return (values - start) * factor, f"{start!r} {unit}"
 
@@ -240,6 +250,8 @@ def _numeric_column(series: pd.Series | np.ndarray, src: str, locate) -> np.ndar
         if not pd.api.types.is_numeric_dtype(series.dtype) or pd.api.types.is_bool_dtype(series.dtype):
             raise InputError(f"{locate(0)}: `{src}` is not numeric (type {series.dtype})")
         values = series.to_numpy(dtype=float)
+    if math.isfinite(values.sum()):  # NaN and infinity carry into a sum: every value is finite, found in one pass
+        return values
     bad = _where(values, lambda v: ~np.isfinite(v))
     if bad.size:
         i = int(bad[0])
@@ -252,7 +264,7 @@ def _numeric_extra(series: pd.Series | np.ndarray) -> np.ndarray | None:
     """A further column as float64 when every cell is a number (infinity included), else None."""
     if isinstance(series, np.ndarray):
         values = series.astype(float, copy=False)
-        return None if _where(values, np.isnan).size else values
+        return None if math.isnan(values.sum()) and _where(values, np.isnan).size else values
     import pandas as pd
 
     col = pd.to_numeric(series, errors="coerce")
@@ -262,6 +274,8 @@ def _numeric_extra(series: pd.Series | np.ndarray) -> np.ndarray | None:
 def _check_axis(values: np.ndarray, src: str, canonical: str, unit: str, factor: float, locate) -> None:
     """Refuse an axis reading beyond :class:`AxisLimits` (in the file's unit)."""
     bound = AxisLimits().bound(canonical)
+    if not values.size or -bound <= values.min() and values.max() <= bound:  # two passes, no temporaries
+        return
     outside = _where(values, lambda v: np.abs(v) > bound)
     if outside.size:
         i = int(outside[0])
@@ -273,6 +287,8 @@ def _check_axis(values: np.ndarray, src: str, canonical: str, unit: str, factor:
 
 def _check_temperature(temperature: np.ndarray, src: str, locate) -> None:
     lo, hi = PLAUSIBLE_DEGC
+    if not temperature.size or lo <= temperature.min() and temperature.max() <= hi:
+        return
     outside = _where(temperature, lambda t: (t < lo) | (t > hi))
     if outside.size:
         i = int(outside[0])
@@ -292,14 +308,16 @@ def _where(values: np.ndarray, test: Callable[[np.ndarray], np.ndarray]) -> np.n
     return np.concatenate(hits) if hits else np.empty(0, dtype=np.intp)
 
 
-def _own(values: np.ndarray, owned: bool) -> np.ndarray:
-    """`values` as a writable array the recording may keep.
+def _own(values: np.ndarray, owned: bool, views: bool = False) -> np.ndarray:
+    """`values` as a writable array the recording may keep, or as it is when `views`.
 
     Reused when `owned` and the memory under it is this column alone (a
     column of a throw-away frame, of which pandas hands out a read-only
     view); otherwise copied, so the recording neither aliases a caller's
     table nor keeps a 2-D block of other columns alive.
     """
+    if views:
+        return values
     base = values
     while isinstance(base.base, np.ndarray):
         base = base.base

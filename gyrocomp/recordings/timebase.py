@@ -25,13 +25,17 @@ _MEDIAN_ROWS = 1 << 20
 """Intervals the median interval is taken of in one array (8 MiB); a longer time axis is selected a chunk at a time."""
 
 
-def _check_order(out: dict, spec: ColumnSpec, locate) -> tuple[dict, np.ndarray | None, list[str]]:
+def _check_order(out: dict, spec: ColumnSpec, locate, intervals: tuple[float, float] | None = None) -> tuple[dict, np.ndarray | None, list[str]]:
     """Refuse time going back; refuse or merge (``spec.dedupe``) duplicate stamps.
 
+    `intervals`, the least and the largest interval (:func:`interval_range`),
+    lets a time axis whose intervals are all positive pass without a second look.
     Returns the columns, the file row of each kept row (None when all were
     kept) and the notes.
     """
     time = out["time"]
+    if intervals is not None and intervals[0] > 0:
+        return out, None, []
     back = _where_intervals(time, lambda dt: dt < 0)
     same = _where_intervals(time, lambda dt: dt == 0)
     if back.size and (not same.size or back[0] < same[0] or spec.dedupe is not None):
@@ -177,11 +181,24 @@ def _check_time_base(time: np.ndarray, nominal: float, src: str, name: str, limi
 _UNIT_WORDS = {"ms": "milliseconds (ms)", "us": "microseconds (µs, us)", "ns": "nanoseconds (ns)"}
 
 
-def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, resample: bool, allow_gaps: bool, open_ends: tuple[bool, bool] = (False, False), first_segment: int = 0):
+def _segments(
+    out: dict,
+    nominal: float,
+    src: str,
+    locate,
+    tolerance: float,
+    resample: bool,
+    allow_gaps: bool,
+    open_ends: tuple[bool, bool] = (False, False),
+    first_segment: int = 0,
+    intervals: tuple[float, float] | None = None,
+):
     """Segments of a time axis, or its uniform resampling; refuse what neither allows.
 
     An interval longer than ``(1 + tolerance)`` times the median is a gap;
-    one shorter than ``(1 - tolerance)`` times it is jitter.
+    one shorter than ``(1 - tolerance)`` times it is jitter. `intervals`,
+    the least and the largest interval (:func:`interval_range`), lets a
+    time axis with neither pass without a second look.
 
     Returns
     -------
@@ -195,6 +212,8 @@ def _segments(out: dict, nominal: float, src: str, locate, tolerance: float, res
     if n < 2:
         return out, [slice(0, n)], []
     slack = 1e-9 * nominal  # an interval exactly at the tolerance (ms stamps: 10 or 30 ms at 20 ms) is within it
+    if intervals is not None and (1.0 - tolerance) * nominal - slack <= intervals[0] and intervals[1] <= (1.0 + tolerance) * nominal + slack:
+        return out, [slice(0, n)], []
     short = _where_intervals(time, lambda dt: dt < (1.0 - tolerance) * nominal - slack)
     long = _where_intervals(time, lambda dt: dt > (1.0 + tolerance) * nominal + slack)
 
@@ -274,6 +293,23 @@ def _resample(columns: dict[str, np.ndarray], interval: float, src: str = "time"
     check_length("resample_max_samples", n, f"{where}--resample onto a {interval:.6g} s grid over {time[-1] - time[0]:.6g} s of `{src}`")
     grid = time[0] + interval * np.arange(n)
     return {key: (grid if key == "time" else np.interp(grid, time, values)) for key, values in columns.items()}
+
+
+def interval_range(time: np.ndarray) -> tuple[float, float]:
+    """The least and the largest interval ``np.diff(time)``, :data:`_CHECK_ROWS` at a time (NaN when one is NaN; inf, -inf for fewer than 2 stamps).
+
+    One pass that clears a regular time axis of every per-interval check
+    (:func:`_check_order`, :func:`_segments`); only an axis it does not
+    clear is looked at interval by interval, for the message.
+    """
+    least, largest = math.inf, -math.inf
+    for start in range(0, len(time) - 1, _CHECK_ROWS):
+        d = np.diff(time[start : start + _CHECK_ROWS + 1])
+        low, high = d.min(), d.max()
+        if math.isnan(low) or math.isnan(high):
+            return math.nan, math.nan
+        least, largest = min(least, float(low)), max(largest, float(high))
+    return least, largest
 
 
 def _where_intervals(time: np.ndarray, test: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
