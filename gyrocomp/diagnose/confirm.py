@@ -14,7 +14,8 @@ names one unlists it (:class:`Unlisting`), the model is refitted without it
    holdout does not need at its fitted shape (:func:`replication`),
    although it could have seen it there (:func:`visible`);
 3. :func:`unsteady` -- an effect whose per-run amplitude changes between
-   parts of the runs (:func:`steadiness`);
+   parts of the runs (:func:`steadiness`; an effect whose per-run columns
+   are a nuisance beside a shared amplitude is not judged here);
 4. :func:`stands_in_for_structure` -- an effect that gains at most the
    selection's ``bic_margin`` beside a structure the tests found on the
    fit run (:func:`gain_beside`).
@@ -224,11 +225,16 @@ def unsteady(state: Round) -> Unlisting | None:
     """Rule 3: an effect with a per-run amplitude whose per-run columns differ between parts of the runs (:func:`steadiness`).
 
     An interference keeps its amplitude and phase, where a sinusoid fitted
-    to a transient or to a wander that comes late does not.
+    to a transient or to a wander that comes late does not. Only effects
+    whose amplitude is per run (:attr:`~gyrocomp.effects.vocabulary.Effect.amplitude_per_run`)
+    are judged: a hysteresis' per-run columns are its state at power-on,
+    constant on a run that never leaves the play (a soak), where splitting
+    them in parts tests the steadiness of the offset, not of the hysteresis.
     """
     s = state.settings.confirm
     problems = [q for _, q in state.runs]
-    p = {e: steadiness(problems, state.model, e, s.steady_segments, s.steady_min_cycles) for e in state.per_run()}
+    judged = [e for e in state.per_run() if KINDS[e].amplitude_per_run]
+    p = {e: steadiness(problems, state.model, e, s.steady_segments, s.steady_min_cycles) for e in judged}
     p = {e: v for e, v in p.items() if v < s.replication_alpha}
     if not p:
         return None

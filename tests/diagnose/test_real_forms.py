@@ -155,6 +155,27 @@ def test_a_play_hysteresis_is_one_hysteresis_not_a_random_walk():
     assert dict(zip(model.names, model.beta))["hysteresis"] == pytest.approx(amplitude, rel=0.1)
 
 
+@pytest.mark.parametrize("initial, width, seed", [(0.95, 10.0, 21), (-0.9, 10.0, 22), (0.9, 6.0, 23)])
+def test_a_play_powered_on_near_a_branch_is_one_hysteresis(initial, width, seed):
+    """A play powered on at `initial` of its branch: hysteresis alone, its amplitude within 5 %.
+
+    Such a play follows the temperature at once when it first moves,
+    where the centred start waits half the width: not a constant. With one
+    power-on indicator (until the first excursion) the 10 degC play started
+    at 0.95 was read as hysteresis plus a warm-up; its two power-on columns
+    (the start on either branch less the centred start) span it.
+    """
+    t, temperature, measured, _, rng = _oven(seed)
+    amplitude = 0.01
+    rate = _baseline(temperature, rng) + amplitude * play_operator(temperature, width, initial)
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert model.order == ("hysteresis",)
+    assert model.spec["hysteresis"]["operator"] == "play"
+    assert dict(zip(model.names, model.beta))["hysteresis"] == pytest.approx(amplitude, rel=0.05)
+    assert {"hysteresis_power_on_high", "hysteresis_power_on_low"} <= set(model.names)
+
+
 def test_the_power_on_column_spans_the_samples_before_the_first_excursion():
     t, temperature, measured, _, rng = _oven(4)
     fit_p, _ = _search(t, _baseline(temperature, rng), measured)

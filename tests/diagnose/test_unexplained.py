@@ -483,6 +483,32 @@ def test_a_play_hysteresis_the_holdout_finds_again_stays_listed():
     assert any(w["test"] == "step" for w in v["where"]), v["where"]
 
 
+def test_a_play_hysteresis_on_a_soak_holdout_is_not_judged_unsteady():
+    """The play of :func:`_play_pair` on its fit run, and a holdout that soaks at 25 degC for 4 h (the same step at 60 %).
+
+    On the soak the play's power-on columns are constants: split in four
+    parts they describe the step, and `unsteady` unlisted the play
+    (p = 9e-16). Its per-run columns are a nuisance beside its amplitude,
+    not an amplitude, so the rule does not judge it; the holdout cannot see
+    it either (`visible`), so `refuted_on_holdout` keeps it too.
+    """
+    from gyrocomp.diagnose.select import Search
+    from independent_gen import play_operator
+
+    fit = _play_pair(3)[0]
+    t = np.arange(4 * 3600.0)
+    temp = 25.0 + 0.01 * np.random.default_rng(12).standard_normal(t.size)
+    x = 0.002 * ((temp - 30.0) / 35.0) ** 3 + 0.005 * play_operator(temp, 9.0, 0.0) + 0.001 * (t > 0.6 * t[-1])
+    x = x + N * np.random.default_rng(503).standard_normal(t.size)
+    runs = [fit, ("holdout", Problem(Run("holdout", t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), fit[1].scale, 3))]
+    search = Search([fit[1]], ["hysteresis"])
+    model = search.run()
+    assert model.order == ("hysteresis",) and model.spec["hysteresis"]["operator"] == "play"
+    kept, v = cf.confirm(search, runs, model)
+    assert kept.order == ("hysteresis",) and v["unlisted"] == [], v["unlisted"]
+    assert v["present"]
+
+
 def _rule_cases():
     """One constructed case per unlisting rule: ``(rule name, confirm's arguments, the effect it unlists)``."""
     from gyrocomp.diagnose.select import Search

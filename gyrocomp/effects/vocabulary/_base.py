@@ -53,7 +53,13 @@ class Effect(abc.ABC):
         the plainest form when the effect has :attr:`forms` (a sinusoid for
         ``periodic``; :meth:`n_params_of` for a fitted one).
     per_run : Columns
-        Design columns re-estimated on every run (an interference phase).
+        Design columns re-estimated on every run (an interference phase, a
+        hysteresis' state at power-on).
+    amplitude_per_run : bool
+        Whether the per-run columns carry the effect's amplitude itself (an
+        interference, whose amplitude and phase are the run's), rather than
+        a nuisance beside an amplitude shared by the runs (a hysteresis'
+        state at power-on).
     unit_columns : int or None
         How many leading columns make the unit shape of the reported
         amplitude (:meth:`amplitude`; detection limits); None: all of them,
@@ -75,6 +81,7 @@ class Effect(abc.ABC):
     grid_setting: str | None = None
     n_params: int = 1
     per_run: Columns = Columns()
+    amplitude_per_run: bool = False
     unit_columns: int | None = None
     forms: tuple = ()
 

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 from gyrocomp.errors import InputError
-from gyrocomp.effects.vocabulary._base import Effect
+from gyrocomp.effects.vocabulary._base import Columns, Effect
 from gyrocomp.effects import shapes
 from gyrocomp.effects._fields import unit_field
 
@@ -44,12 +44,16 @@ class _Hysteresis(Effect):
     one of lowest BIC (a play fitted by a relay leaves its ramps between
     the branches, slow structure a random walk then absorbs).
 
-    The branch the part was left in before power-on is not in the recording:
-    until the temperature first moves beyond the play
-    (:func:`~gyrocomp.effects.shapes.first_excursion`) the bias sits on an
-    unknown branch (or, for a spread of widths, between the branches).
-    The indicator of that first part is re-estimated on every run, as
-    the offset is.
+    The state the part was left in before power-on is not in the
+    recording; what it adds is re-estimated on every run, as the offset is.
+    A relay sits on an unknown branch until the temperature first moves
+    beyond its width (:func:`~gyrocomp.effects.shapes.first_excursion`): one
+    indicator, exact. A play powered on near a branch follows the
+    temperature at once, while the centred start the operator assumes waits
+    half the width: not a constant, so a play takes two columns, its start
+    on either branch less its centred start
+    (:func:`~gyrocomp.effects._stateful.play_start_spread`; exact at either
+    branch, within a quarter of the amplitude between).
     """
 
     name = "hysteresis"
@@ -58,9 +62,17 @@ class _Hysteresis(Effect):
     nonlinear = "deadband_c"
     grid_setting = "hysteresis_deadband_c"
     n_params = 3
-    per_run = ("hysteresis_power_on",)
+    per_run = Columns(("hysteresis_power_on", "hysteresis_power_on_high", "hysteresis_power_on_low"))
     unit_columns = 1
     forms = tuple({"operator": name} for name in OPERATORS)
+
+    def n_per_run(self, params=None):
+        """The power-on part: one indicator for a relay, two columns for a play."""
+        return 2 if (params or {}).get("operator", "relay") == "play" else 1
+
+    def n_params_of(self, params):
+        """Amplitude, width and the power-on part."""
+        return 2 + self.n_per_run(params)
 
     def bias(self, time_s, housing_c, gyro):
         h = gyro.hysteresis
@@ -68,9 +80,18 @@ class _Hysteresis(Effect):
 
     def columns(self, run, params, poly_degree=3, scale=None):
         d = params["deadband_c"]
-        branch = OPERATORS[params.get("operator", "relay")](run.time_s, run.temperature_c, d)
-        power_on = np.arange(branch.size) < shapes.first_excursion(run.temperature_c, d)
-        return np.column_stack([branch, power_on]), [self.name, *self.per_run]
+        operator = params.get("operator", "relay")
+        branch = OPERATORS[operator](run.time_s, run.temperature_c, d)
+        if operator == "relay":
+            power_on = np.arange(branch.size) < shapes.first_excursion(run.temperature_c, d)
+            return np.column_stack([branch, power_on]), [self.name, self.per_run[0]]
+        from gyrocomp.effects._stateful import play_start_spread  # numba: loaded when a play is first fitted
+
+        spread = np.empty((branch.size, 2))
+        restart = np.zeros(branch.size, dtype=bool)
+        restart[:1] = True
+        play_start_spread(np.ascontiguousarray(run.temperature_c, dtype=float), restart, 0.5 * d, spread)
+        return np.column_stack([branch, spread]), [self.name, *self.per_run[1:]]
 
     def grid(self, settings, length_s, block_s):
         return np.array([float(v) for v in getattr(settings, self.grid_setting)])

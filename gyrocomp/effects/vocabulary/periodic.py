@@ -64,6 +64,7 @@ class _Periodic(Effect):
     grid_setting = None  # periodic_min_blocks and periodic_oversample: see grid()
     n_params = 3
     per_run = Columns(("periodic_sin", "periodic_cos"))
+    amplitude_per_run = True
     unit_columns = 2  # detection limits are the fundamental sinusoid's (its phases averaged), as the simulator draws it
 
     def n_params_of(self, params=None):
