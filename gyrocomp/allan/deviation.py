@@ -30,8 +30,14 @@ from gyrocomp.errors import InputError
 
 __all__ = ["Phase", "oadev", "integrate", "integrate_stored", "averaging_factors", "second_difference_sums", "check_fs"]
 
-_CHUNK = 1 << 16
-"""Samples per chunk of the second-difference sums (512 KiB: with its lag buffer, about an L2 cache)."""
+_CHUNK = 1 << 15
+"""Samples per chunk of the second-difference sums (256 KiB: with the window and lag buffer of a short tau, within a core's L2 cache).
+
+The 23 octave taus of 10^7 samples take 0.60 s of CPU, against 0.69 s in
+chunks of 2^16 (whose arrays spill to L3) and 0.72 s in chunks of 2^13
+(more calls). The sums are added chunk by chunk, so the chunk is part of
+their rounding: from 2^16 to 2^15 they moved by at most 1.4e-15 (relative).
+"""
 
 
 class Phase:
