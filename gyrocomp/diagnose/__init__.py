@@ -67,7 +67,6 @@ from gyrocomp.diagnose import confirm as _confirm
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
 from gyrocomp.diagnose import signature as _signature
-from gyrocomp.diagnose.criterion import _key
 from gyrocomp.diagnose.detectability import detection_limit
 from gyrocomp.diagnose.effects import EFFECTS, effect_params
 from gyrocomp.diagnose.error_rate import error_rate
@@ -178,7 +177,7 @@ def _search(runs: Runs, candidates, start_effects, s: DiagnoseSettings, callback
 
     def admissible(problems, model, effect):
         # A later move asks again about a trial model already judged (forward, then backward): judge it once.
-        key = (effect, _key(model), model.noise)
+        key = (effect, model.key, model.noise)
         if key not in checked:
             checked[key] = _signature.check(effect, problems, model, s).ok
         return checked[key]

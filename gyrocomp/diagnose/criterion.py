@@ -59,6 +59,11 @@ class Fitted:
     n_params: int
     bic: float
 
+    @property
+    def key(self) -> tuple:
+        """A hashable key of the model's shape: its effects in order and their nonlinear parameters."""
+        return (self.order, _spec_key(self.spec))
+
 
 @dataclasses.dataclass
 class Problem:
@@ -138,10 +143,6 @@ def residual_of(problem: Problem, model: Fitted):
     """Full-rate residual of the fit run under `model` [deg/s]."""
     X, _ = design(problem.run, model.spec, problem.poly_degree, problem.scale)
     return problem.run.rate_dps - X @ model.beta
-
-
-def _key(model: Fitted):
-    return (model.order, _spec_key(model.spec))
 
 
 def _spec_key(spec: dict):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gyrocomp.diagnose.criterion import Fitted, _key, _refit, _with_own_noise, fit_baseline
+from gyrocomp.diagnose.criterion import Fitted, _refit, _with_own_noise, fit_baseline
 from gyrocomp.diagnose.effects import DETERMINISTIC, PER_RUN, STOCHASTIC
 from gyrocomp.diagnose.nonlinear import _descend, _joint_deviance, _JointPart, extend
 
@@ -81,7 +81,7 @@ class Search:
         ``k ln(total blocks)`` with ``k`` the model's parameters, the per-run
         columns and noise levels counted once per run.
         """
-        key = _key(model)
+        key = model.key
         if key not in self._scores:
             if len(self.runs) == 1:
                 value = model.bic
