@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import math
 import os
 from pathlib import Path
@@ -179,19 +178,20 @@ def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, li
     reader = streaming.read_chunks(path, options.columns, usecols=usecols, gaps=True, writable=False)  # the chunks are only read
     reading = iter(reader)
     head = next(reading)  # the axes and columns, from the first chunk of the first reading, which goes on
-    first = [itertools.chain([head], reading)]
-
-    def chunks():
-        return first.pop() if first else iter(reader)
     if column == "rate":
         values = {axis.name: ((lambda chunk, name=axis.name: chunk.axis(name).rate_dps), axis.unit) for axis in head.axes}
     elif column in head.columns:
         values = {column: ((lambda chunk: chunk.column(column)), "deg/s")}
     else:
         raise InputError(f"{head.name}: no column {column!r} to analyse; it has {', '.join(head.columns)}")
+    warm = head.temperature_c is not None
+    first = [_resumed([head], reading)]
+    del head  # its columns are views of the first row group, which the reading frees when it moves on
+
+    def chunks():
+        return first.pop() if first else iter(reader)
     series, curves = [], []
     label = Path(reader.name).name
-    warm = head.temperature_c is not None
     for name, (pick, unit) in values.items():
         if options.detrend_temperature:
             cubic = _cubic(lambda pick=pick: _with_temperature(reader, chunks(), pick), label, warm)
@@ -206,6 +206,12 @@ def _streamed(path, options: Options, settings, usecols: list) -> tuple[list, li
         series += [pooled, *found] if options.segments and len(found) > 1 else [pooled]
         curves.append((pooled, unit))
     return series, curves, reader.input_record()
+
+
+def _resumed(held: list, rest: Iterator) -> Iterator:
+    """The chunk in `held`, then those of `rest`: a reading resumed after its first chunk, which is not kept once handed out."""
+    yield held.pop()
+    yield from rest
 
 
 def _with_temperature(reader, chunks, pick) -> Iterator[tuple[int, "np.ndarray", "np.ndarray"]]:
