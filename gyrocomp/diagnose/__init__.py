@@ -74,6 +74,7 @@ from gyrocomp.diagnose.identify import unidentifiable
 from gyrocomp.diagnose.runs import Runs, _as_list, problems, reduce_recording, segment_lengths
 from gyrocomp.diagnose.select import Fitted, Problem, Search, extend, fit_baseline, holdout_fit, residual_of
 from gyrocomp.diagnose.settings import DiagnoseSettings, get_config
+from gyrocomp.diagnose.uncertainty import uncertainties
 from gyrocomp.errors import InputError
 
 __all__ = ["DiagnoseSettings", "get_config", "diagnose", "problems", "reduce_recording", "Runs", "SCHEMA", "EFFECTS"]
@@ -140,7 +141,7 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
                                                settings.bic_margin, settings.unexplained.family_alpha, settings.signature.refusal_alpha)},
         "selection_steps": search.steps + _confirm_step(verdict),
         "skipped": skipped,
-        "models": {"baseline": _model_dict(search.baseline), "selected": _model_dict(selected)},
+        "models": {"baseline": _model_dict(search.baseline), "selected": _model_dict(selected, runs.fit)},
         "localization": local,
         "blocks": _blocks(fit, holdouts, runs),
         "settings": settings_dict(settings),
@@ -324,10 +325,16 @@ def _localization(runs: Runs, models, gaps, s: DiagnoseSettings) -> dict:
     return out
 
 
-def _model_dict(model: Fitted) -> dict:
+def _model_dict(model: Fitted, problem=None) -> dict:
+    """`model` for the report; with `problem` (the run it was fitted on), each numeric parameter's 1-sigma ``uncertainty``."""
+    params = {e: effect_params(e, model.spec, model.beta, model.names, model.noise) for e in model.order}
+    if problem is not None:
+        for effect, sigmas in uncertainties(problem, model).items():
+            for name, sigma in sigmas.items():
+                params[effect][name]["uncertainty"] = sigma
     return {
         "effects": list(model.order),
-        "params": {e: effect_params(e, model.spec, model.beta, model.names, model.noise) for e in model.order},
+        "params": params,
         "noise": model.noise.datasheet_units(),
         "coefficients": dict(zip(model.names, model.beta.tolist())),
         "deviance": model.deviance,

@@ -30,8 +30,8 @@ def to_markdown(report: dict) -> str:
     lines.append("**Selected effects:** " + _selected_words(report, code=True))
     rows = _selected_rows(report)
     if rows:
-        lines += ["", "## Selected model (fitted jointly on the selection runs)", "", "| effect | parameter | value | unit |", "|---|---|---|---|"]
-        lines += [f"| `{e}` | {k} | {v} | {u} |" for e, k, v, u in rows]
+        lines += ["", "## Selected model (fitted jointly on the selection runs)", "", "| effect | parameter | value | ± 1 sigma | unit |", "|---|---|---|---|---|"]
+        lines += [f"| `{e}` | {k} | {v} | {d} | {u} |" for e, k, v, d, u in rows]
     blind = _no_temperature_line(report)
     if blind:
         lines += ["", blind]
@@ -110,8 +110,8 @@ def summary_table(report: dict):
     rows = _selected_rows(report)
     if rows:
         model = Table(title="selected model (fitted jointly)")
-        for col in ("effect", "parameter", "value", "unit"):
-            model.add_column(col, justify="right" if col == "value" else "left")
+        for col in ("effect", "parameter", "value", "± 1 sigma", "unit"):
+            model.add_column(col, justify="right" if col in ("value", "± 1 sigma") else "left")
         for row in rows:
             model.add_row(*row)
         parts.append(model)
@@ -120,10 +120,17 @@ def summary_table(report: dict):
 
 
 def _selected_rows(report):
-    """``(effect, parameter, value, unit)`` of every selected effect, from the selected model's joint fit."""
+    """``(effect, parameter, value, 1-sigma, unit)`` of every selected effect, from the selected model's joint fit
+    (the uncertainty blank for a form's name, "not estimated" where the likelihood's curvature does not give one)."""
     params = ((report.get("models") or {}).get("selected") or {}).get("params", {})
-    return [(effect, name, format_value(v["value"]), v["unit"]) for effect in report["selected_effects"]
+    return [(effect, name, format_value(v["value"]), _sigma(v), v["unit"]) for effect in report["selected_effects"]
             for name, v in params.get(effect, {}).items()]
+
+
+def _sigma(entry):
+    if "uncertainty" not in entry:
+        return ""
+    return "not estimated" if entry["uncertainty"] is None else format_value(entry["uncertainty"])
 
 
 def _no_temperature_line(report):
