@@ -414,8 +414,11 @@ def report_figure(report: dict):
 
 
 def gap_figure(report: dict):
-    """``diagnose``: residual RMS by regime and ADEV ratio by tau, baseline against selected, one row per run."""
-    from gyrocomp.diagnose.report import format_value
+    """``diagnose``: residual RMS by regime and ADEV ratio by tau, baseline against selected, one row per run;
+    the selected model's parameters with their 1-sigma uncertainties as the title."""
+    import textwrap
+
+    from gyrocomp.diagnose.report import format_value, selected_rows
 
     runs = [r for r in ("fit", "holdout") if r in report["localization"]]
     fig = _figure(12.0, 4.0 * len(runs))
@@ -441,6 +444,10 @@ def gap_figure(report: dict):
         row[1].set_ylabel("ADEV residual / ADEV simulation")
         row[1].set_title(f"{run}: gap by timescale (gap {format_value(report['gap']['baseline'][run])} -> {format_value(report['gap']['selected'][run])})")
         row[1].legend(fontsize=8)
+    rows = selected_rows(report)
+    if rows:
+        words = "; ".join(f"{e} {k} = {v}" + (f" ± {d}" if d and d != "not estimated" else "") + (f" {u}" if u else "") for e, k, v, d, u in rows)
+        fig.suptitle(textwrap.fill("selected model (± 1 sigma): " + words, 150), fontsize=8)
     return fig
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from gyrocomp.artefacts import artefact_header
 
-__all__ = ["to_json", "to_markdown", "summary_table", "format_value"]
+__all__ = ["to_json", "to_markdown", "summary_table", "selected_rows", "format_value"]
 
 
 def to_json(body: dict, *, inputs: list, settings: dict) -> dict:
@@ -28,7 +28,7 @@ def to_markdown(report: dict) -> str:
     if names:
         lines += [f"Recordings: {names}", ""]
     lines.append("**Selected effects:** " + _selected_words(report, code=True))
-    rows = _selected_rows(report)
+    rows = selected_rows(report)
     if rows:
         lines += ["", "## Selected model (fitted jointly on the selection runs)", "", "| effect | parameter | value | ± 1 sigma | unit |", "|---|---|---|---|---|"]
         lines += [f"| `{e}` | {k} | {v} | {d} | {u} |" for e, k, v, d, u in rows]
@@ -107,7 +107,7 @@ def summary_table(report: dict):
         mark = " *" if effect in sel else ""
         table.add_row(f"+ {effect}{mark}", format_value(c["gap_fit"]), format_value(c["gap_holdout"]), format_value(c["delta_bic"]), _limit(effect, c, sel))
     parts = []
-    rows = _selected_rows(report)
+    rows = selected_rows(report)
     if rows:
         model = Table(title="selected model (fitted jointly)")
         for col in ("effect", "parameter", "value", "± 1 sigma", "unit"):
@@ -119,7 +119,7 @@ def summary_table(report: dict):
     return Group(*parts, table)
 
 
-def _selected_rows(report):
+def selected_rows(report):
     """``(effect, parameter, value, 1-sigma, unit)`` of every selected effect, from the selected model's joint fit
     (the uncertainty blank for a form's name, "not estimated" where the likelihood's curvature does not give one)."""
     params = ((report.get("models") or {}).get("selected") or {}).get("params", {})

@@ -55,3 +55,24 @@ def test_stated_sigmas_match_the_scatter_of_the_estimates():
         assert 0.6 < np.std(v) < 1.6, (k, np.round(v, 2))
         assert abs(np.mean(v)) < 0.8, (k, np.round(v, 2))
 
+
+
+def _report(uncertainty):
+    params = {"hysteresis": {"amplitude_dps": {"value": 0.0099, "unit": "deg/s", "uncertainty": uncertainty},
+                             "operator": {"value": "play", "unit": ""}}}
+    regime = {"soak": {"rms_deg_h": 3.0, "expected_rms_deg_h": 2.0}}
+    local = {"regime": regime, "timescale": {"adev": [{"tau_s": 1.0, "ratio": 1.0}, {"tau_s": 10.0, "ratio": 1.2}]}}
+    return {"selected_effects": ["hysteresis"], "models": {"selected": {"params": params}},
+            "localization": {"fit": {"baseline": local, "selected": local}}, "gap": {"baseline": {"fit": 3.0}, "selected": {"fit": 0.2}}}
+
+
+@pytest.mark.parametrize("uncertainty, shown", [(0.00015, "0.00015"), (None, "not estimated")])
+def test_the_report_shows_each_parameter_with_its_sigma(uncertainty, shown):
+    from gyrocomp.diagnose.report import selected_rows
+    from gyrocomp.plots import gap_figure
+
+    rows = selected_rows(_report(uncertainty))
+    assert rows == [("hysteresis", "amplitude_dps", "0.010", shown, "deg/s"), ("hysteresis", "operator", "play", "", "")]
+    title = gap_figure(_report(uncertainty))._suptitle.get_text()
+    assert "amplitude_dps = 0.010" in title
+    assert ("± 0.00015 deg/s" in title) == (uncertainty is not None)
