@@ -386,8 +386,7 @@ def _frozen(problem, model, effect):
     if names != model.names:
         raise ValueError(f"design {names} differs from the model's {model.names}")
     free = np.array([n in PER_RUN for n in names])
-    others = problem.design_blocks({k: v for k, v in model.spec.items() if k != effect})[1]
-    own = np.array([n not in others for n in names])
+    own = problem.own_columns(model.spec, effect)
     fixed = ~free & ~own
     return Xb, free, own, problem.y - Xb[:, fixed] @ model.beta[fixed]
 

@@ -102,6 +102,11 @@ class Problem:
         X, names = self._blocks[key]
         return X, list(names)
 
+    def own_columns(self, spec, effect) -> np.ndarray:
+        """Mask of the columns of :meth:`design_blocks` at `spec` that `effect` adds (absent from the design without it)."""
+        others = self.design_blocks({k: v for k, v in spec.items() if k != effect})[1]
+        return np.array([n not in others for n in self.design_blocks(spec)[1]])
+
     def bic(self, deviance, n_params):
         return deviance + n_params * np.log(self.y.size)
 

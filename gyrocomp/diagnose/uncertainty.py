@@ -64,7 +64,7 @@ def uncertainties(problem, model, step: float = 0.02) -> dict:
             _add(var, _linear(problem, model, effect, names, cov, values))
             for name, theta in model.spec.get(effect, {}).items():
                 if isinstance(theta, float) and name in var:
-                    curvature = _curvature(lambda f: _at_parameter(problem, model, effect, name, theta * f), d0, step) / theta**2
+                    curvature = _curvature(lambda f: _at_parameter(problem, model, effect, name, theta * f, whitener), d0, step) / theta**2
                     var[name] = var[name] + 2.0 / curvature if curvature > 0.0 else math.inf
         for level in NOISE_PARAMETERS.get(effect, ()):
             q = getattr(model.noise, level)
@@ -89,9 +89,8 @@ def _add(var: dict, more: dict):
 
 def _linear(problem, model, effect, names, cov, values):
     """Variance of each reported value from the effect's own coefficients (delta method, covariance kept)."""
-    others = problem.design_blocks({k: v for k, v in model.spec.items() if k != effect})[1]
-    own = [j for j, n in enumerate(names) if n not in others]
-    if not own:
+    own = np.flatnonzero(problem.own_columns(model.spec, effect))
+    if not own.size:
         return {}
     params = model.spec.get(effect, {})
     jac = np.zeros((len(values), len(own)))
@@ -115,9 +114,9 @@ def _curvature(deviance_at, d0, step):
     return (up - 2.0 * d0 + down) / step**2
 
 
-def _at_parameter(problem, model, effect, name, value):
+def _at_parameter(problem, model, effect, name, value, whitener):
     spec = {**model.spec, effect: {**model.spec[effect], name: value}}
-    return profile_deviance(problem.y, problem.design_blocks(spec)[0], problem.basis.whitener(model.noise))[0]
+    return profile_deviance(problem.y, problem.design_blocks(spec)[0], whitener)[0]
 
 
 def _at_noise(problem, model, level, value, Xb):
