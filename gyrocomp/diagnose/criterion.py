@@ -102,6 +102,24 @@ class Problem:
         X, names = self._blocks[key]
         return X, list(names)
 
+    def whitened(self, whitener, key, blocks):
+        """Block-mean columns `blocks` (a callable returning them, called once per `key`) whitened by `whitener`.
+
+        The eigenbasis rotation that every noise model of one family shares
+        (:meth:`~gyrocomp.effects.likelihood.NoiseBasis.whitener`) is kept per
+        family and `key`, so the searches, which whiten the same grid
+        columns at each model's noise, only rescale them (the same products,
+        byte for byte); other factorisations whiten the kept block means.
+        """
+        if ("blocks", key) not in self._blocks:
+            self._blocks["blocks", key] = _read_only(blocks())
+        raw = self._blocks["blocks", key]
+        if whitener.family is None:
+            return whitener.whiten(raw)
+        if ("rotated", whitener.family, key) not in self._blocks:
+            self._blocks["rotated", whitener.family, key] = _read_only(whitener.rotated(raw))
+        return whitener.scaled(self._blocks["rotated", whitener.family, key])
+
     def own_columns(self, spec, effect) -> np.ndarray:
         """Mask of the columns of :meth:`design_blocks` at `spec` that `effect` adds (absent from the design without it)."""
         others = self.design_blocks({k: v for k, v in spec.items() if k != effect})[1]

@@ -182,13 +182,9 @@ def _periodic_waveform(parts, periods, settings, length_s, block_s, deviance):
     h_max = np.array([effect.max_harmonics(settings, p, length_s, block_s) for p in periods])
     log_n = np.log(sum(part.y_w.size for part in parts))
     best_score, best = np.inf, None
-    # Harmonic k's columns are the same in every series that has it: whiten each period's once.
-    whitened = [_whitened_harmonics(part, periods, h_max) for part in parts]
+    grid = _periodic_grid_deviances(parts, periods, h_max)
     for h in range(1, int(h_max.max()) + 1):
-        ok = np.flatnonzero(h_max >= h)
-        values = np.full(len(periods), np.inf)
-        values[ok] = _periodic_grid_deviances(parts, periods[ok], h, [[w[i] for i in ok] for w in whitened])
-        period, dev = _refine(periods, values, lambda p: deviance({"period_s": p, "harmonics": h}))
+        period, dev = _refine(periods, grid[h - 1], lambda p: deviance({"period_s": p, "harmonics": h}))
         score = dev + 2 * h * len(parts) * log_n
         if score < best_score:
             best_score, best = score, ({"period_s": period, "harmonics": h}, dev)
@@ -218,39 +214,47 @@ class _JointPart:
         if effect == "periodic":
             harmonics = int(params.get("harmonics", 1))
             return self.whitener.whiten(periodic_block_means(self.problem.run, params["period_s"], harmonics)), harmonic_names(harmonics)
-        blocks, names = self.problem.effect_blocks(effect, params)
-        return self.whitener.whiten(blocks), names
+        names = self.problem.effect_blocks(effect, params)[1]
+        key = (effect, tuple(sorted(params.items())))
+        return self.problem.whitened(self.whitener, key, lambda: self.problem.effect_blocks(effect, params)[0]), names
 
 
-def _whitened_harmonics(part: _JointPart, periods, h_max) -> list:
+def _whitened_harmonics(part: _JointPart, periods, h_max) -> dict:
     """Whitened block means of each period's sin/cos columns up to its own largest number of harmonics `h_max`.
 
-    Returns a list, one array of shape ``(n_blocks, 2 h_max[g])`` per period
-    (columns in :func:`~gyrocomp.diagnose.effects.periodic_block_means` order,
-    so the first ``2 h`` are the series of ``h`` harmonics); periods of one
-    ``h_max`` are whitened in one product.
+    Returns a dict ``{H: (index, columns)}`` over the values ``H > 0`` of
+    `h_max`: the periods ``index`` of that ``H`` and their columns, an array
+    of shape ``(len(index), n_blocks, 2 H)`` (in
+    :func:`~gyrocomp.diagnose.effects.periodic_block_means` order, so the
+    first ``2 h`` are the series of ``h`` harmonics), whitened in one
+    product (:meth:`~gyrocomp.diagnose.criterion.Problem.whitened`).
     """
-    out = [np.empty((part.y_w.size, 0))] * len(periods)
+    out = {}
     for h in np.unique(h_max[h_max > 0]):
         index = np.flatnonzero(h_max == h)
-        cols = part.whitener.whiten(np.hstack([periodic_block_means(part.problem.run, periods[i], h) for i in index]))
-        for j, i in enumerate(index):
-            out[i] = cols[:, 2 * h * j : 2 * h * (j + 1)]
+        key = ("periodic", int(h), periods[index].tobytes())
+        cols = part.problem.whitened(part.whitener, key, lambda: np.hstack([periodic_block_means(part.problem.run, periods[i], h) for i in index]))
+        out[int(h)] = (index, cols.reshape(cols.shape[0], index.size, 2 * h).transpose(1, 0, 2))
     return out
 
 
-def _periodic_grid_deviances(parts, periods, harmonics=1, whitened=None):
-    """:func:`_joint_deviance` of ``periodic`` of `harmonics` harmonics at every period of a grid, in a few matrix products.
+def _periodic_grid_deviances(parts, periods, h_max):
+    """:func:`_joint_deviance` of ``periodic`` at every period of a grid and every number of harmonics up to the
+    period's own largest `h_max`, in a few matrix products.
 
     The base columns do not change along the grid: with ``U`` an orthonormal
     basis of the (stacked, whitened) base design, ``y_perp = y - U U' y``
     and the sin/cos columns ``C`` of one period (per run), the deviance is
     ``constant + |y_perp|^2 - b' A^+ b`` with ``b = C' y_perp`` and
-    ``A = C'C - (U'C)'(U'C)``; all periods' ``C`` are whitened at once, or
-    taken from `whitened` (per part, per period, at least ``2 harmonics``
-    whitened columns: :func:`_whitened_harmonics`).
+    ``A = C'C - (U'C)'(U'C)``. ``A`` and ``b`` of ``h`` harmonics are the
+    leading rows and columns (per run) of those of the period's `h_max`
+    (:func:`_whitened_harmonics`), so each period's are formed once.
+
+    Returns
+    -------
+    ndarray, shape (h_max.max(), len(periods))
+        Row ``h - 1``: the deviances of ``h`` harmonics (inf where ``h`` exceeds `h_max`).
     """
-    c = 2 * int(harmonics)
     free = [np.array([n in PER_RUN for n in part.base_names]) for part in parts]
     shared = np.vstack([part.base_w[:, ~f] for part, f in zip(parts, free)])
     per_run = linalg.block_diag(*[part.base_w[:, f] for part, f in zip(parts, free)])
@@ -258,28 +262,29 @@ def _periodic_grid_deviances(parts, periods, harmonics=1, whitened=None):
     u = u[:, sv > sv[0] * 1e-12]
     y = np.concatenate([part.y_w for part in parts])
     y_perp = y - u @ (u.T @ y)
-    n_g = len(periods)
-    gram = np.zeros((n_g, c * len(parts), c * len(parts)))
-    b = np.zeros((n_g, c * len(parts)))
-    ucs = np.zeros((n_g, u.shape[1], c * len(parts)))
-    row = 0
-    for j, part in enumerate(parts):
-        k = part.y_w.size
-        if whitened is None:
-            cols = np.hstack([periodic_block_means(part.problem.run, p, harmonics) for p in periods])  # (k, c G)
-            cw = part.whitener.whiten(cols).reshape(k, n_g, c).transpose(1, 0, 2)  # (G, k, c)
-        else:
-            cw = np.stack([w[:, :c] for w in whitened[j]])  # (G, k, c)
-        # stacked matrix products (BLAS), not einsum: the same sums, an order of magnitude faster
-        cwt = cw.transpose(0, 2, 1)
-        gram[:, c * j : c * j + c, c * j : c * j + c] = cwt @ cw
-        b[:, c * j : c * j + c] = cwt @ y_perp[row : row + k]
-        ucs[:, :, c * j : c * j + c] = u[row : row + k].T @ cw
-        row += k
-    a = gram - ucs.transpose(0, 2, 1) @ ucs
-    explained = np.einsum("gi,gij,gj->g", b, np.linalg.pinv(a, rcond=1e-12, hermitian=True), b)
-    constant = sum(part.constant for part in parts)
-    return constant + float(y_perp @ y_perp) - explained
+    residual = sum(part.constant for part in parts) + float(y_perp @ y_perp)
+    whitened = [_whitened_harmonics(part, periods, h_max) for part in parts]
+    out = np.full((int(h_max.max()), len(periods)), np.inf)
+    for h_top, (index, _) in whitened[0].items():
+        c, n_parts = 2 * h_top, len(parts)
+        gram = np.zeros((index.size, c * n_parts, c * n_parts))
+        b = np.zeros((index.size, c * n_parts))
+        ucs = np.zeros((index.size, u.shape[1], c * n_parts))
+        row = 0
+        for j, part in enumerate(parts):
+            k, cw = part.y_w.size, whitened[j][h_top][1]  # (G, k, c)
+            # stacked matrix products (BLAS), not einsum: the same sums, an order of magnitude faster
+            cwt = cw.transpose(0, 2, 1)
+            gram[:, c * j : c * j + c, c * j : c * j + c] = cwt @ cw
+            b[:, c * j : c * j + c] = cwt @ y_perp[row : row + k]
+            ucs[:, :, c * j : c * j + c] = u[row : row + k].T @ cw
+            row += k
+        a = gram - ucs.transpose(0, 2, 1) @ ucs
+        for h in range(1, h_top + 1):
+            keep = (c * np.arange(n_parts)[:, None] + np.arange(2 * h)).ravel()
+            a_h, b_h = a[:, keep][:, :, keep], b[:, keep]
+            out[h - 1, index] = residual - np.einsum("gi,gij,gj->g", b_h, np.linalg.pinv(a_h, rcond=1e-12, hermitian=True), b_h)
+    return out
 
 
 def _joint_deviance(parts, params, effect):

@@ -250,7 +250,7 @@ class NoiseBasis:
         """
         white = noise.arw**2 / self.block_s
         if not (noise.bias_instability or noise.rate_random_walk):
-            return _Whitener(None, np.full(self.n_blocks, white))
+            return _Whitener(None, np.full(self.n_blocks, white), "white")
         if noise.bias_correlation_s or (noise.bias_instability and noise.rate_random_walk):
             return self._semiseparable(noise)
         key, matrix, value = (
@@ -261,7 +261,7 @@ class NoiseBasis:
         if key not in self._eig:
             self._eig[key] = linalg.eigh(matrix, check_finite=False)
         lam, q = self._eig[key]
-        return _Whitener(q, white + value**2 * np.maximum(lam, 0.0))
+        return _Whitener(q, white + value**2 * np.maximum(lam, 0.0), key)
 
     def _semiseparable(self, noise: NoiseModel):
         """The factorisation ``Sigma = L D L'`` (``L`` unit lower) in O(k J^2).
@@ -347,11 +347,13 @@ def _gls(yw, Xw):
 
 class _Whitener:
     """``whiten(v) = Sigma^(-1/2) v`` from eigenvectors ``q`` and eigenvalues ``d``,
-    or from a lower Cholesky factor when ``d`` is None."""
+    or from a lower Cholesky factor when ``d`` is None; ``family`` names the ``q`` that a family of noise
+    models shares (``"white"``: none): columns :meth:`rotated` once serve every model of it (:meth:`scaled`)."""
 
-    def __init__(self, q, d):
+    def __init__(self, q, d, family=None):
         self.q = q
         self.d = d
+        self.family = family
         if d is None:
             self.logdet = 2.0 * float(np.sum(np.log(np.diag(q))))
         else:
@@ -361,7 +363,14 @@ class _Whitener:
     def whiten(self, v):
         if self.d is None:
             return linalg.solve_triangular(self.q, v, lower=True, check_finite=False)
-        v = v if self.q is None else self.q.T @ v
+        return self.scaled(self.rotated(v))
+
+    def rotated(self, v):
+        """``Q' v``, the part of :meth:`whiten` shared by the `family`."""
+        return v if self.q is None else self.q.T @ v
+
+    def scaled(self, v):
+        """Rotated `v` (:meth:`rotated`) scaled by ``d^(-1/2)``: whitened."""
         return v * (self._scale if v.ndim == 1 else self._scale[:, None])
 
 
@@ -369,6 +378,7 @@ class _SemiseparableWhitener:
     """``whiten(v) = D^(-1/2) L^(-1) v`` from celerite2's factorisation ``Sigma = L D L'`` (:meth:`NoiseBasis._semiseparable`)."""
 
     d = None  # no eigenbasis to rotate into once (fit_noise_runs)
+    family = None
 
     def __init__(self, t, rates, U, W, d):
         self._factor = (t, rates, U, W)
