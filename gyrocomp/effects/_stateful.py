@@ -161,7 +161,10 @@ def play_start_spread(x, restart, half_width, out):
     amplitude, a weighted sum of the two (exact at either branch, and while
     no play is clamped): the start is unknown, so a fit takes both columns
     with free coefficients rather than the one constant that holds only
-    while the temperature stays within the play.
+    while the temperature stays within the play. A third column of `out`,
+    if any, takes the centred play's own output ``(x - p) / (w / 2)``
+    (:func:`gyrocomp.effects.shapes.hysteresis_play` before the first
+    excursion, in this pass).
 
     Parameters
     ----------
@@ -171,7 +174,7 @@ def play_start_spread(x, restart, half_width, out):
         Samples at which the play restarts centred (the first; after a gap, when gaps are not bridged).
     half_width : float
         Half the play's width [degC] (> 0).
-    out : ndarray, shape (n, 2)
+    out : ndarray, shape (n, 2) or (n, 3)
     """
     high = low = centre = 0.0
     for i in range(x.shape[0]):
@@ -183,6 +186,8 @@ def play_start_spread(x, restart, half_width, out):
         centre = min(max(centre, v - half_width), v + half_width)
         out[i, 0] = (centre - high) / half_width
         out[i, 1] = (centre - low) / half_width
+        if out.shape[1] > 2:
+            out[i, 2] = (v - centre) / half_width
 
 
 def new_state() -> np.ndarray:

@@ -232,7 +232,7 @@ def hysteresis_branch(time_s, temperature_c, deadband_c):
     return out
 
 
-def hysteresis_play(time_s, temperature_c, width_c):
+def hysteresis_play(time_s, temperature_c, width_c, centred=None):
     """Output in [-1, 1] of a play (backlash) operator of width `width_c`: ``(T - p) / (w / 2)``, ``p`` kept within ``w / 2`` of T.
 
     After a reversal the output moves linearly from one branch to the other
@@ -256,6 +256,10 @@ def hysteresis_play(time_s, temperature_c, width_c):
         Temperature [degC].
     width_c : float
         Width of the play [degC] (> 0).
+    centred : array_like, shape (n,), optional
+        The centred play's output, when a compiled pass has computed it
+        (:func:`gyrocomp.effects._stateful.play_start_spread`): taken up to
+        the first excursion instead of the loop over those samples here.
 
     Returns
     -------
@@ -277,10 +281,13 @@ def hysteresis_play(time_s, temperature_c, width_c):
     out = np.empty(temperature.size)
     half = 0.5 * width_c
     first = first_excursion(temperature, width_c)
-    p = temperature[0] if temperature.size else 0.0
-    for i in range(first):  # within the play of the power-on temperature: one pass, then the vectorised branches
-        p = min(max(p, temperature[i] - half), temperature[i] + half)
-        out[i] = (temperature[i] - p) / half
+    if centred is None:
+        p = temperature[0] if temperature.size else 0.0
+        for i in range(first):  # within the play of the power-on temperature: one pass, then the vectorised branches
+            p = min(max(p, temperature[i] - half), temperature[i] + half)
+            out[i] = (temperature[i] - p) / half
+    else:
+        out[:first] = centred[:first]
     switches = np.flatnonzero(np.diff(branch[first:])) + 1 + first
     edges = np.concatenate([[first], switches, [temperature.size]]).astype(int)
     for a, b in zip(edges[:-1], edges[1:]):

@@ -80,18 +80,19 @@ class _Hysteresis(Effect):
 
     def columns(self, run, params, poly_degree=3, scale=None):
         d = params["deadband_c"]
-        operator = params.get("operator", "relay")
-        branch = OPERATORS[operator](run.time_s, run.temperature_c, d)
-        if operator == "relay":
+        if params.get("operator", "relay") == "relay":
+            branch = shapes.hysteresis_branch(run.time_s, run.temperature_c, d)
             power_on = np.arange(branch.size) < shapes.first_excursion(run.temperature_c, d)
             return np.column_stack([branch, power_on]), [self.name, self.per_run[0]]
         from gyrocomp.effects._stateful import play_start_spread  # numba: loaded when a play is first fitted
 
-        spread = np.empty((branch.size, 2))
-        restart = np.zeros(branch.size, dtype=bool)
+        # One compiled pass: the two power-on columns and the centred play up to its first excursion.
+        spread = np.empty((run.time_s.size, 3))
+        restart = np.zeros(run.time_s.size, dtype=bool)
         restart[:1] = True
         play_start_spread(np.ascontiguousarray(run.temperature_c, dtype=float), restart, 0.5 * d, spread)
-        return np.column_stack([branch, spread]), [self.name, *self.per_run[1:]]
+        branch = shapes.hysteresis_play(run.time_s, run.temperature_c, d, centred=spread[:, 2])
+        return np.column_stack([branch, spread[:, :2]]), [self.name, *self.per_run[1:]]
 
     def grid(self, settings, length_s, block_s):
         return np.array([float(v) for v in getattr(settings, self.grid_setting)])
