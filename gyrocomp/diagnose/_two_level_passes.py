@@ -119,3 +119,34 @@ def _forward(row, mu0, mu1, sig, st0, st1, em0, em1, top, a0, a1, scale):
         a1[i] = f1 / scale[i]
         total += math.log(scale[i]) + top[i]
     return total
+
+
+@numba.njit(cache=True)
+def kalman_passes(y, phi, ratio):
+    """The Kalman recursions of :func:`gyrocomp.diagnose.two_level.markov_loglik` for every row of `y` (m, n) (its
+    mean removed) and grid point ``(phi, ratio)`` (g,): innovation variances (n, g) at ``sigma^2 = 1`` and each row's
+    sum of squared standardised innovations (m, g); the same products, in the same order, as the numpy recursion
+    (the rows, independent, in the innermost loop)."""
+    m, n = y.shape
+    g = phi.size
+    var, gain = np.empty((n, g)), np.empty((n, g))
+    p = ratio.copy()
+    for i in range(n):
+        for k in range(g):
+            var[i, k] = p[k] + 1.0
+            gain[i, k] = p[k] / var[i, k]
+            square = phi[k] * phi[k]
+            p[k] = square * p[k] * (1.0 - gain[i, k]) + ratio[k] * (1.0 - square)
+    columns = np.ascontiguousarray(y.T)
+    ss = np.zeros((g, m))
+    state = np.empty(m)
+    for k in range(g):
+        state[:] = 0.0
+        total = ss[k]
+        for i in range(n):
+            v, a, f, row = var[i, k], gain[i, k], phi[k], columns[i]
+            for j in range(m):
+                r = row[j] - state[j]
+                total[j] += r * r / v
+                state[j] = f * (state[j] + a * r)
+    return var, np.ascontiguousarray(ss.T)

@@ -119,24 +119,13 @@ def markov_loglik(y, phi, ratio):
     >>> bool(abs(markov_loglik(y, np.array([0.0]), np.array([1e-9]))[0] - white) < 1e-6)
     True
     """
+    from gyrocomp.diagnose import _two_level_passes as passes
+
     y = np.atleast_2d(np.asarray(y, dtype=float))
     y = y - y.mean(axis=1, keepdims=True)
-    m, n = y.shape
-    phi, ratio = np.asarray(phi, dtype=float), np.asarray(ratio, dtype=float)
-    # The Kalman variances (sigma^2 = 1) do not depend on the data: one recursion for the whole grid.
-    var = np.empty((n, phi.size))
-    gain = np.empty((n, phi.size))
-    p = ratio.copy()
-    for i in range(n):
-        var[i] = p + 1.0
-        gain[i] = p / var[i]
-        p = phi**2 * p * (1.0 - gain[i]) + ratio * (1.0 - phi**2)
-    state = np.zeros((m, phi.size))
-    ss = np.zeros((m, phi.size))
-    for i in range(n):
-        r = y[:, i, None] - state
-        ss += r**2 / var[i]
-        state = phi * (state + gain[i] * r)
+    n = y.shape[1]
+    # The Kalman variances (sigma^2 = 1) do not depend on the data: one recursion for the whole grid (compiled).
+    var, ss = passes.kalman_passes(np.ascontiguousarray(y), np.asarray(phi, dtype=float), np.asarray(ratio, dtype=float))
     loglik = -0.5 * n * (np.log(ss / n) + 1.0 + _LOG_2PI) - 0.5 * np.log(var).sum(axis=0)
     return loglik.max(axis=1)
 

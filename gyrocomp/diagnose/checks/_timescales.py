@@ -25,8 +25,8 @@ class Timescales:
     block_s : float
     r, cov_r : ndarray
         The GLS residual and its covariance under the model (only with `ms`).
-    resid_maker : ndarray
-        ``R``.
+    sampler : ndarray
+        ``R L``, a square root of ``cov_r`` (``L^-1 L = I``: ``R L = L - X Xw^+``).
     lower : ndarray
         ``L``.
     settings
@@ -42,12 +42,22 @@ class Timescales:
         if not self.ms.size:
             return
         pinv = linalg.pinv(Xw)
-        self.resid_maker = np.eye(n) - X @ pinv @ linalg.solve_triangular(lower, np.eye(n), lower=True, check_finite=False)
-        self.r = self.resid_maker @ problem.y
-        self.cov_r = self.resid_maker @ cov @ self.resid_maker.T
+        # R Sigma R' = (R L)(R L)': one product of n x n matrices, where R and R Sigma R' took three.
+        self.sampler = lower - X @ pinv
+        self.r = problem.y - X @ (pinv @ linalg.solve_triangular(lower, problem.y, lower=True, check_finite=False))
+        self.cov_r = self.sampler @ self.sampler.T
+        self._increments = {}
 
     def means(self, m):
         """The matrix of the non-overlapping means of `m` blocks (``k x n``, the tail dropped)."""
         n = self.r.size
         k = n // m
         return np.hstack([np.kron(np.eye(k), np.full((1, m), 1.0 / m)), np.zeros((k, n - k * m))])
+
+    def increments(self, m):
+        """The first differences of the `m`-block means (:meth:`means`, ``(k - 1) x n``) and their covariance under the
+        model, computed once per `m` (the ``allan`` and ``extreme`` checks read both)."""
+        if m not in self._increments:
+            diff = np.diff(self.means(m), axis=0)
+            self._increments[m] = (diff, diff @ self.cov_r @ diff.T)
+        return self._increments[m]

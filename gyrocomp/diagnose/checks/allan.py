@@ -19,7 +19,6 @@ import numpy as np
 from scipy import stats
 
 from gyrocomp.diagnose.checks._base import Check, Result
-from gyrocomp.diagnose.gap import effective_dof
 
 
 def test(ts):
@@ -27,11 +26,12 @@ def test(ts):
     out = []
     for m in ts.ms:
         k = ts.r.size // m
-        diff = np.diff(ts.means(m), axis=0)
+        diff, cov_d = ts.increments(m)
         form = diff / np.sqrt(2.0 * (k - 1))
         avar = float(np.sum((form @ ts.r) ** 2))
-        mean = float(np.sum(np.diag(diff @ ts.cov_r @ diff.T)) / (2.0 * (k - 1)))
-        nu = effective_dof(form, ts.cov_r)
+        mean = float(np.sum(np.diag(cov_d)) / (2.0 * (k - 1)))
+        # Satterthwaite's tr(A)^2 / tr(A^2) of |form r|^2 (gyrocomp.diagnose.gap.effective_dof), A = cov_d / (2 (k - 1)): the scale cancels.
+        nu = float(np.trace(cov_d) ** 2 / np.sum(cov_d * cov_d))
         x = nu * avar / mean
         p = float(min(1.0, 2.0 * min(stats.chi2.cdf(x, nu), stats.chi2.sf(x, nu))))
         out.append(Result(float(x), p, {"tau_s": float(m * ts.block_s), "ratio": avar / mean, "dof": nu}))

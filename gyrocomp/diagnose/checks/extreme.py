@@ -36,8 +36,7 @@ def test(ts):
     n_steady = int(np.sum(n // ts.ms - 1 >= s.stationarity_segments * s.min_segment_increments))
     for m in ts.ms:
         k = n // m
-        diff = np.diff(ts.means(m), axis=0)
-        cov_d = diff @ ts.cov_r @ diff.T
+        diff, cov_d = ts.increments(m)
         d = diff @ ts.r
         z = np.abs(d) / np.sqrt(np.diag(cov_d))
         p_max = float(min(1.0, z.size * 2.0 * stats.norm.sf(z.max())))

@@ -42,7 +42,7 @@ def run_levels(ts):
     s, m = ts.settings, ts.ms[0]
     agg = ts.means(m)
     out = level_test(agg @ ts.r, agg @ ts.cov_r @ agg.T) | {"tau_s": float(m * ts.block_s)}
-    out["two_levels"] = two_level.switching_test(ts.r, ts.resid_maker @ ts.lower, s.two_level_draws,
+    out["two_levels"] = two_level.switching_test(ts.r, ts.sampler, s.two_level_draws,
                                                  s.two_level_iterations, s.two_level_seed)
     return out
 
