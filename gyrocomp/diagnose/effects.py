@@ -36,6 +36,7 @@ import functools
 
 import numpy as np
 
+from gyrocomp.effects import shapes
 from gyrocomp.effects.vocabulary import DETERMINISTIC, EFFECTS, KINDS, NEEDS_TEMPERATURE, PER_RUN, STOCHASTIC
 from gyrocomp.effects.vocabulary.thermal_lag import polynomial_columns
 
@@ -116,6 +117,14 @@ class Run:
     @property
     def n_blocks(self) -> int:
         return self.rate_dps.size // self.n_per_block
+
+    @functools.cached_property
+    def temperature_rate_c_per_s(self) -> np.ndarray:
+        """dT/dt of the measured temperature [degC/s] (:func:`gyrocomp.effects.shapes.temperature_rate` over
+        `rate_smooth_s`), computed once: every design with ``temp_rate`` takes it."""
+        rate = shapes.temperature_rate(self.time_s, self.temperature_c, smooth_s=self.rate_smooth_s)
+        rate.setflags(write=False)
+        return rate
 
     @functools.cached_property
     def block_centre_s(self) -> np.ndarray:

@@ -57,7 +57,7 @@ class _TempRate(Effect):
         return t.coefficient_dps_per_c_per_s * rate + t.asymmetry_dps_per_c_per_s * np.abs(rate)
 
     def columns(self, run, params, poly_degree=3, scale=None):
-        rate = shapes.temperature_rate(run.time_s, run.temperature_c, smooth_s=run.rate_smooth_s)
+        rate = run.temperature_rate_c_per_s  # a diagnosis run keeps it (gyrocomp.diagnose.effects.Run)
         if not params.get("asymmetric", False):
             return rate[:, None], [self.name]
         return np.column_stack([rate, np.abs(rate)]), [self.name, f"{self.name}_asymmetry"]
