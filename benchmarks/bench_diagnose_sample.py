@@ -54,15 +54,17 @@ sys.path.insert(0, sys.argv[1])
 import numpy as np
 from gyrocomp.decompose import emd
 from gyrocomp.diagnose import two_level
+from gyrocomp.effects._stateful import play_start_spread
 emd.emd(np.random.default_rng(0).standard_normal(5000).cumsum())
-two_level.two_level_loglik(np.random.default_rng(0).standard_normal((2, 50)), 2)
+two_level.statistic(np.random.default_rng(0).standard_normal((2, 50)), 2)
+play_start_spread(np.zeros(3), np.ones(3, dtype=bool), 1.0, np.empty((3, 2)))
 """
 
 
 def warm_up(tree: Path) -> None:
     """Compile (or load) `tree`'s numba kernels that `diagnose` calls (the EMD of its localization, the signature's
-    two-level Baum-Welch), not counted: numba caches machine code beside each source file, so an exported tree
-    compiles on its first run, as an installed copy does once."""
+    two-level statistic, a play hysteresis' power-on columns), not counted: numba caches machine code beside each
+    source file, so an exported tree compiles on its first run, as an installed copy does once."""
     subprocess.run([sys.executable, "-c", WARM_UP, str(tree)], check=True, capture_output=True)
 
 
