@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import subprocess
 import sys
 
@@ -43,14 +44,31 @@ def test_every_command_has_help(command):
 
 
 def test_start_up_imports_no_heavy_module():
-    """`gyrocomp --help` must stay fast: no numeric stack at import time."""
+    """`gyrocomp --help` must stay fast: no numeric stack at import time, nor rich (made where a table is printed) or pydantic."""
     code = (
         "import sys, gyrocomp.cli\n"
-        "heavy = [m for m in ('numpy', 'pandas', 'scipy', 'matplotlib', 'sklearn', 'pyarrow') if m in sys.modules]\n"
+        "heavy = [m for m in ('numpy', 'pandas', 'scipy', 'matplotlib', 'sklearn', 'pyarrow', 'rich', 'pydantic') if m in sys.modules]\n"
         "print(','.join(heavy))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ""
+
+
+def test_commands_annotations_are_evaluated_when_defined():
+    """typer reads every command's parameters at each start; string annotations would be compiled and evaluated there.
+
+    Without ``from __future__ import annotations`` in ``gyrocomp/cli`` the
+    annotations are objects made when the module is imported (from its
+    byte code), so building the command group compiles none of them.
+    """
+    import typer.main
+
+    group = typer.main.get_command(app)
+    assert len(group.commands) == len(_commands()) >= 10
+    for name, command in group.commands.items():
+        hints = inspect.unwrap(command.callback).__annotations__
+        strings = [key for key, hint in hints.items() if isinstance(hint, str)]
+        assert not strings, f"gyrocomp {name}: annotations {strings} are strings (from __future__ import annotations in its cli module?)"
 
 
 def test_unknown_command_is_a_usage_error():

@@ -6,8 +6,6 @@ atomically and prints. Heavy imports happen inside the command bodies so
 that ``gyrocomp --help`` stays fast.
 """
 
-from __future__ import annotations
-
 import contextlib
 import dataclasses
 import os
@@ -17,12 +15,14 @@ import time
 import traceback
 import warnings
 from pathlib import Path
-from typing import Annotated, Callable, Iterator, Optional
+from typing import TYPE_CHECKING, Annotated, Callable, Iterator, Optional
 
 import typer
-from rich.console import Console
 
 from gyrocomp import __version__
+
+if TYPE_CHECKING:  # rich is imported where a console is made: `--help` and a `--quiet` command need none
+    from rich.console import Console
 
 class _Group(typer.core.TyperGroup):
     """The command group; the global flags (:data:`GLOBAL_FLAGS`) are accepted after the sub-command too.
@@ -113,8 +113,10 @@ def state(ctx: typer.Context) -> State:
     return ctx.obj if isinstance(ctx.obj, State) else State()
 
 
-def console_for(ctx: typer.Context, out: Path | str | None = None) -> Console:
+def console_for(ctx: typer.Context, out: Path | str | None = None) -> "Console":
     """Where tables and progress go: stderr when stdout carries data (``--out -``)."""
+    from rich.console import Console
+
     st = state(ctx)
     to_stderr = str(out) == "-"
     console = Console(stderr=to_stderr, quiet=st.quiet, soft_wrap=False)
@@ -205,6 +207,7 @@ def progress(ctx: typer.Context, description: str, out: Path | str | None = None
     a long ``run`` or ``diagnose`` shows it is alive without flooding the
     log. Nothing with ``--quiet``.
     """
+    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     st = state(ctx)
@@ -254,7 +257,7 @@ class LogLines:
         Seconds, monotonic (:func:`time.monotonic`).
     """
 
-    def __init__(self, console: Console, description: str, every_s: float = LOG_EVERY_S, clock: Callable[[], float] = time.monotonic):
+    def __init__(self, console: "Console", description: str, every_s: float = LOG_EVERY_S, clock: Callable[[], float] = time.monotonic):
         self.console = console
         self.description = description
         self.every_s = every_s

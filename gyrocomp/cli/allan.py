@@ -1,7 +1,5 @@
 """``gyrocomp allan``: overlapping Allan deviation, IEEE Std 952 terms, plot, CI thresholds."""
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import Annotated, List, Optional
 
@@ -21,6 +19,7 @@ from gyrocomp.cli._app import (
     app,
     console_for,
     report_errors,
+    state,
 )
 
 
@@ -74,12 +73,11 @@ def allan(
     """
     from gyrocomp.commands import allan as stage, from_params
 
-    console = console_for(ctx, out)
     with report_errors(ctx):
         options = from_params(stage.Options, ctx.params)
         series = stage.to_files(recordings, out, options)
-        if not console.quiet:  # the table is only built to be printed
-            console.print(_table(series))
+        if not state(ctx).quiet:  # the table (and the console, rich's) only made to be printed
+            console_for(ctx, out).print(_table(series))
         stage.check(series, options)
 
 

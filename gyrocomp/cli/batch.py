@@ -1,7 +1,5 @@
 """``gyrocomp batch``: run allan, compensate, run or diagnose over many recordings, incrementally, locally or on Dask."""
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import Annotated, List, Optional
 

@@ -1,7 +1,5 @@
 """``gyrocomp classify``: entropy and class (noise / mixed / drift) of each component."""
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import Annotated, List, Optional
 

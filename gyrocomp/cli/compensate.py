@@ -1,7 +1,5 @@
 """``gyrocomp compensate``: apply a model.json to a recording."""
 
-from __future__ import annotations
-
 import sys
 from pathlib import Path
 from typing import Annotated, Optional

@@ -1,7 +1,5 @@
 """``gyrocomp decompose``: a recording's rate into components (LCD, ICEEMDAN, CEEMDAN, EMD)."""
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import Annotated, List, Optional
 

@@ -1,7 +1,5 @@
 """``gyrocomp diagnose``: where the sim-to-real gap lies and which effect causes it."""
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import Annotated, Optional
 

@@ -1,7 +1,5 @@
 """``gyrocomp export``: a model.json as PX4 / ArduPilot parameters, a C99 header or plain JSON."""
 
-from __future__ import annotations
-
 import sys
 from pathlib import Path
 from typing import Annotated, Optional

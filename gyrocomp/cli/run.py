@@ -1,7 +1,5 @@
 """``gyrocomp run``: train, compensate and score every method of a run config; write the comparison report."""
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import Annotated, List, Optional
 

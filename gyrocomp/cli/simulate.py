@@ -1,7 +1,5 @@
 """``gyrocomp simulate``: a recording from a gyro error model and an oven profile."""
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import Annotated, List, Optional
 

@@ -1,7 +1,5 @@
 """``gyrocomp train``: fit a pipeline config's drift models and write ``model.json``."""
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import Annotated, List, Optional
 
