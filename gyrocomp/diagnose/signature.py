@@ -13,11 +13,17 @@ a. **between runs** -- the runs agree on the term's level (``agreement``),
    temperature (``replication``), and no tone repeats at one time since
    power-on in every run (``spectrum``);
 b. **innovations** -- on each run, the block-mean residual whitened under
-   the model's noise (its levels refitted on that run by maximum
-   likelihood; Cholesky, time ordered: for a random walk these are, up to
-   the white part, its increments) is white (``ljung_box``), without trend
-   (``trend``), without temperature dependence or a step at one temperature
-   (``temperature_absorbed``) and without a step in time (``step``);
+   the model's noise (its levels refitted on that run by restricted
+   maximum likelihood; Cholesky, time ordered: for a random walk these
+   are, up to the white part, its increments) is white (``ljung_box``),
+   without trend (``trend``), without temperature dependence or a step at
+   one temperature (``temperature_absorbed``) and without a step in time
+   (``step``). Restricted, because the baseline's offset and temperature
+   polynomial take the slow part of a random walk or a long Gauss-Markov
+   wander: maximum likelihood then reads its level low (``K^2`` at 0.4 of
+   the truth beside a cubic over 4 h, ``tests/diagnose/test_likelihood.py``),
+   and a true noise term, judged at that level, shows "steps" and an Allan
+   variance above its own at long ``tau``;
 c. **timescales** -- at every octave ``tau`` where the term carries at least
    ``explains_share`` of the model's Allan variance (the timescales it
    explains), the residual's Allan variance lies within its interval
@@ -135,8 +141,8 @@ def check(term, runs, model, settings: DiagnoseSettings = DiagnoseSettings(), ex
     free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
     per_run, whitened, levels = [], [], []
     for p, X in zip(runs, designs):
-        # Each run is judged at its own maximum-likelihood levels: whether they agree is test (a).
-        own = fit_noise(p.y, X, p.basis, model.noise, free)[0]
+        # Each run is judged at its own (restricted) maximum-likelihood levels: whether they agree is test (a).
+        own = fit_noise(p.y, X, p.basis, model.noise, free, restricted=True)[0]
         cov = p.basis.covariance(own)
         whitened.append(innovations(p.y, X, cov))
         out, level = _run_tests(p, X, own, cov, whitened[-1], term, s)

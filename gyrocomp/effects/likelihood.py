@@ -394,20 +394,25 @@ class _SemiseparableWhitener:
         return out.reshape(v.shape)
 
 
-def fit_noise(y, X, basis: NoiseBasis, start: NoiseModel, free=("arw",)):
+def fit_noise(y, X, basis: NoiseBasis, start: NoiseModel, free=("arw",), restricted=False):
     """Maximum-likelihood noise terms for block means `y` with regressors `X`.
 
     The log-variances of the terms named in `free` are optimised (Nelder-Mead,
     from `start`); the others keep their value in `start`, 0 meaning absent.
+    With `restricted`, the restricted likelihood instead
+    (:func:`fit_noise_runs`).
 
     Returns
     -------
     noise : NoiseModel
     deviance : float
-        ``-2 log L`` at the optimum.
+        ``-2 log L`` at the optimum (``-2 log L_R`` with `restricted`).
     beta : ndarray
     """
     names = tuple(free)
+    if restricted:
+        noise, deviance, betas = fit_noise_runs([(y, X, basis)], start, free, restricted=True)
+        return noise, deviance, betas[0]
     if names == ("arw",) and not (start.bias_instability or start.rate_random_walk):
         # White only: Sigma = s^2 I, so the ML s^2 is the mean squared OLS residual.
         unit = basis.whitener(NoiseModel(arw=np.sqrt(basis.block_s)))
@@ -419,7 +424,7 @@ def fit_noise(y, X, basis: NoiseBasis, start: NoiseModel, free=("arw",)):
     return noise, deviance, betas[0]
 
 
-def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
+def fit_noise_runs(runs, start: NoiseModel, free=("arw",), restricted=False):
     """Noise terms shared by several runs of one gyro, by maximum likelihood.
 
     Each run keeps its own regression coefficients; the runs' ``-2 log L``
@@ -439,13 +444,28 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
         squared residual whitened by ``Sigma_1``): Nelder-Mead searches the
         coloured terms' log ratios to it, one dimension fewer and about half
         the evaluations, to the same optimum.
+    restricted : bool
+        Maximise the restricted (residual) likelihood of Patterson and
+        Thompson [4]_ instead, ``-2 log L_R = -2 log L + log det(X'
+        Sigma^-1 X) - p log 2 pi`` at the GLS ``beta`` (``N^2`` concentrated
+        as ``rss / (n - p)``): the likelihood of the residual contrasts,
+        which does not see what the regressors take. Maximum likelihood
+        reads a slow correlated noise short and weak where a temperature
+        polynomial or a per-run offset absorbs its slow part; the
+        restricted likelihood does not. Restricted deviances compare noise
+        models at one design `X` only.
 
     Returns
     -------
     noise : NoiseModel
     deviance : float
-        Summed ``-2 log L`` at the optimum.
+        Summed ``-2 log L`` at the optimum (``-2 log L_R`` with `restricted`).
     betas : list of ndarray
+
+    References
+    ----------
+    .. [4] H. D. Patterson, R. Thompson, "Recovery of inter-block information
+       when block sizes are unequal", Biometrika 58(3), 545-554 (1971).
     """
     names = tuple(free)
     # The likelihood is flat in a log-variance far below the white level: a
@@ -481,7 +501,7 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
     rotated = {}
 
     def run_terms(k, y, X, w):
-        """``(log det Sigma, r' Sigma^-1 r)`` of run `k` at its GLS beta."""
+        """``(log det Sigma, r' Sigma^-1 r)`` of run `k` at its GLS beta; with `restricted`, ``log det(X' Sigma^-1 X)`` added to the first."""
         if w.d is not None:
             # Same eigenvectors for every noise model of this family: rotate once.
             key = (k, id(w.q))
@@ -490,7 +510,8 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
             y, X = rotated[key]
             w = _Whitener(None, w.d)
         try:
-            return w.logdet, _gls(w.whiten(y), w.whiten(X))[1]
+            Xw = w.whiten(X)
+            return w.logdet + (_log_det_gram(Xw) if restricted else 0.0), _gls(w.whiten(y), Xw)[1]
         except linalg.LinAlgError:
             return w.logdet, np.inf
 
@@ -504,17 +525,20 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
             if key not in whiteners:
                 whiteners[key] = basis.whitener(noise)
             terms = run_terms(k, y, X, whiteners[key])
-            total += float(terms[0] + terms[1] + y.size * np.log(2.0 * np.pi))
-            logdet, rss, n = logdet + terms[0], rss + terms[1], n + y.size
+            m = y.size - (X.shape[1] if restricted else 0)
+            total += float(terms[0] + terms[1] + m * np.log(2.0 * np.pi))
+            logdet, rss, n = logdet + terms[0], rss + terms[1], n + m
         if scaled:
-            # -2 log L at the ML scale N^2 = rss / n of Sigma = N^2 Sigma_1.
+            # -2 log L at the ML scale N^2 = rss / n of Sigma = N^2 Sigma_1 (n less the columns: restricted).
             return logdet + n * np.log(max(rss / n, 1e-300)) + n + n * np.log(2.0 * np.pi)
         return total
 
     best = optimize.minimize(
         objective, x0, method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 1e-2, "initial_simplex": _simplex(x0)}
     )
-    noise = model(best.x, _white_variance(runs, model(best.x, 1.0)) if scaled else None)
+    noise = model(best.x, _white_variance(runs, model(best.x, 1.0), restricted) if scaled else None)
+    if restricted:
+        return noise, float(best.fun), [profile_deviance(y, X, basis.whitener(noise))[1] for y, X, basis in runs]
     deviance, betas = 0.0, []
     for y, X, basis in runs:
         dev, beta = profile_deviance(y, X, basis.whitener(noise))
@@ -523,13 +547,22 @@ def fit_noise_runs(runs, start: NoiseModel, free=("arw",)):
     return noise, deviance, betas
 
 
-def _white_variance(runs, unit: NoiseModel):
-    """The ML ``N^2`` of ``Sigma = N^2 Sigma_1`` over `runs`, ``Sigma_1`` the covariance of `unit` (``arw`` 1)."""
+def _white_variance(runs, unit: NoiseModel, restricted=False):
+    """The ML ``N^2`` of ``Sigma = N^2 Sigma_1`` over `runs`, ``Sigma_1`` the covariance of `unit` (``arw`` 1);
+    with `restricted`, the REML one (the residual degrees of freedom ``n - p``)."""
     rss = 0.0
     for y, X, basis in runs:
         w = basis.whitener(unit)
         rss += _gls(w.whiten(y), w.whiten(X))[1]
-    return max(rss / sum(y.size for y, _, _ in runs), 1e-300)
+    return max(rss / sum(y.size - (X.shape[1] if restricted else 0) for y, X, _ in runs), 1e-300)
+
+
+def _log_det_gram(Xw):
+    """``log det(Xw' Xw)`` over the columns `Xw` spans (singular values above ``1e-12`` of the largest, as :func:`_gls`'s rank)."""
+    if Xw.shape[1] == 0:
+        return 0.0
+    sv = linalg.svdvals(Xw, check_finite=False)
+    return float(2.0 * np.sum(np.log(sv[sv > 1e-12 * sv[0]])))
 
 
 def _simplex(x0, step=2.0):

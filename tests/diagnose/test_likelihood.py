@@ -114,6 +114,37 @@ def test_fit_noise_recovers_bias_instability(b_deg_h):
     assert_allclose(noise.arw * 60, 1.0, rtol=0.1)
 
 
+def test_restricted_white_level_is_the_unbiased_residual_variance():
+    """White only, restricted: ``N^2 / T_b`` is the least-squares residual variance over ``n - p`` (the textbook REML)."""
+    rng = np.random.default_rng(5)
+    y = 0.01 * rng.standard_normal(120)
+    X = np.vander(np.linspace(-1.0, 1.0, y.size), 6)
+    rss = float(np.sum((y - X @ np.linalg.lstsq(X, y, rcond=None)[0]) ** 2))
+    noise, _, _ = fit_noise(y, X, NoiseBasis(y.size, 10.0), NoiseModel(arw=0.03), ("arw",), restricted=True)
+    assert_allclose(noise.arw**2 / 10.0, rss / (y.size - X.shape[1]), rtol=0.02)
+    ml, _, _ = fit_noise(y, X, NoiseBasis(y.size, 10.0), NoiseModel(arw=0.03), ("arw",))
+    assert_allclose(ml.arw**2 / 10.0, rss / y.size, rtol=1e-9)
+
+
+def test_restricted_likelihood_does_not_read_a_random_walk_low_beside_a_slow_polynomial():
+    """A random walk (numpy cumulative sums) beside a cubic in time over a 4 h run: the cubic takes the walk's slow
+    part, so maximum likelihood reads ``K^2`` at about 0.4 of the truth over 24 draws; the restricted
+    likelihood (Patterson-Thompson) at 0.75-1.25 of it."""
+    k, n_white = 3.0 / 3600.0 / 60.0, 0.005
+    ml, restricted = [], []
+    for seed in range(24):
+        rng = np.random.default_rng(seed)
+        x = n_white * rng.standard_normal(4 * 3600) + np.cumsum(k * rng.standard_normal(4 * 3600))
+        y = block_means(x, 60)
+        X = np.vander(np.linspace(-1.0, 1.0, y.size), 4)
+        start = NoiseModel(arw=n_white, rate_random_walk=k)
+        for out, flag in ((ml, False), (restricted, True)):
+            noise = fit_noise(y, X, NoiseBasis(y.size, 60.0), start, ("arw", "rate_random_walk"), restricted=flag)[0]
+            out.append((noise.rate_random_walk / k) ** 2)
+    assert np.mean(ml) < 0.6
+    assert 0.75 < np.mean(restricted) < 1.25
+
+
 def test_fit_noise_concentrates_the_white_level_to_the_same_optimum():
     """White, flicker and random walk free: the ratios' search with N^2 concentrated out reaches the deviance of a
     tight three-dimensional search, and N^2 is its closed-form ML (no better N nearby)."""
