@@ -59,6 +59,7 @@ from scipy import linalg, optimize
 
 from gyrocomp.allan import ieee952
 from gyrocomp.allan.ieee952 import FLICKER_AVAR, MARKOV_PEAK_AVAR, markov_avar
+from gyrocomp.effects.block_covariance import block_lags, flicker_block_covariance, markov_amplitude, markov_block_covariance
 
 __all__ = ["FLICKER_AVAR", "NoiseBasis", "NoiseModel", "block_means", "markov_block_covariance", "merge_blocks", "profile_deviance", "fit_noise", "fit_noise_runs"]
 
@@ -194,9 +195,9 @@ class NoiseBasis:
         self.random_walk = centre[earlier]
         self.random_walk[idx, idx] = start + self.block_s / 3.0
         self._centre = centre
-        self._lag = _block_lags(self.n_blocks, self.block_s, None if starts is None else centre)
-        self.flicker, self._flicker_tc, flicker_scale = _flicker_block_covariance(self._lag, self.block_s)
-        self._flicker_amplitude = flicker_scale * _markov_amplitude(self.block_s, self._flicker_tc)
+        self._lag = block_lags(self.n_blocks, self.block_s, None if starts is None else centre)
+        self.flicker, self._flicker_tc, flicker_scale = flicker_block_covariance(self._lag, self.block_s)
+        self._flicker_amplitude = flicker_scale * markov_amplitude(self.block_s, self._flicker_tc)
         self._markov = {}
         self._eig = {}
 
@@ -269,7 +270,7 @@ class NoiseBasis:
         Below the diagonal every term is a sum of ``U_i V_j exp(-c (t_i - t_j))``
         over the block centres ``t_i > t_j``: each Gauss-Markov process of
         the flicker (or the Markov form) is one such term
-        (:func:`_markov_amplitude`), the random walk another (``c = 0``,
+        (:func:`~gyrocomp.effects.block_covariance.markov_amplitude`), the random walk another (``c = 0``,
         ``U = K^2``, ``V_j = t_j``, ``min(t_i, t_j) = t_j``). ``Sigma`` is then
         a semiseparable matrix of rank ``J`` (the terms present) plus its
         diagonal, which celerite2's solver factorises exactly in O(k J^2)
@@ -284,7 +285,7 @@ class NoiseBasis:
         if b2:
             if noise.bias_correlation_s:
                 rates.append(1.0 / noise.bias_correlation_s)
-                amplitudes.append(b2 * _markov_amplitude(self.block_s, noise.bias_correlation_s) * (FLICKER_AVAR / MARKOV_PEAK_AVAR))
+                amplitudes.append(b2 * markov_amplitude(self.block_s, noise.bias_correlation_s) * (FLICKER_AVAR / MARKOV_PEAK_AVAR))
             else:
                 rates += list(1.0 / self._flicker_tc)
                 amplitudes += list(b2 * self._flicker_amplitude)
@@ -567,65 +568,3 @@ def _log_det_gram(Xw):
 
 def _simplex(x0, step=2.0):
     return np.vstack([x0] + [x0 + step * e for e in np.eye(x0.size)])
-
-
-def _block_lags(n_blocks, block_s, centres=None):
-    """Distances between blocks in blocks, ``|i - j|`` (with block `centres` [s]: their distance over ``T_b``)."""
-    if centres is None:
-        return np.abs(np.subtract.outer(np.arange(n_blocks), np.arange(n_blocks))).astype(float)
-    return np.abs(np.subtract.outer(centres, centres)) / block_s
-
-
-def markov_block_covariance(lag, block_s, correlation_s):
-    """Block-mean covariance of a unit-variance Gauss-Markov process at block distances `lag` (:func:`_block_lags`).
-
-    A process with autocovariance ``exp(-|u| / T)`` has, with ``a = T_b / T``,
-    block-mean variance ``2 (a - 1 + e^-a) / a^2`` and covariance
-    ``(1 - e^-a)^2 e^-(h-1)a / a^2`` at a lag of ``h >= 1`` blocks.
-    """
-    a = block_s / correlation_s
-    diag = 2.0 * (a - 1.0 + np.exp(-a)) / a**2
-    off = (-np.expm1(-a)) ** 2 / a**2 * np.exp(-(np.maximum(lag, 1.0) - 1.0) * a)
-    return np.where(lag == 0, diag, off)
-
-
-def _markov_amplitude(block_s, correlation_s):
-    """``A`` with :func:`markov_block_covariance` ``= A exp(-|t_i - t_j| / T)`` between distinct blocks (centres ``t``).
-
-    ``(1 - e^-a)^2 e^a / a^2 = (2 sinh(a / 2) / a)^2``, ``a = T_b / T``.
-    """
-    a = block_s / np.asarray(correlation_s, dtype=float)
-    return (2.0 * np.sinh(0.5 * a) / a) ** 2
-
-
-def _flicker_block_covariance(lag, block_s, per_decade=3):
-    """Block-mean covariance of unit-``B`` flicker at block distances `lag`, as a sum of Gauss-Markov processes.
-
-    Time constants run three per decade from ``T_b / 10`` to ``L / (2 pi)``:
-    the 1/f spectrum is modelled from the recording's lowest frequency
-    ``1 / L`` up (as :func:`gyrocomp.effects.noise.flicker` synthesises it), so
-    that flicker does not borrow the random walk's power below ``1 / L``
-    (``L`` the span the blocks cover). Each process's block-mean covariance
-    is :func:`markov_block_covariance`, all of one variance.
-
-    Returns
-    -------
-    cov : ndarray, shape (n_blocks, n_blocks)
-    correlation_s : ndarray
-        The processes' time constants ``T`` [s].
-    scale : float
-        `cov` is `scale` times the sum of the processes' unit covariances.
-    """
-    n_blocks = lag.shape[0]
-    length = (float(lag[0, -1]) + 1.0) * block_s
-    exponents = np.arange(
-        np.floor(per_decade * np.log10(block_s / 10.0)), np.ceil(per_decade * np.log10(length / (2.0 * np.pi))) + 1
-    )
-    tcs = 10.0 ** (exponents / per_decade)
-    cov = np.zeros((n_blocks, n_blocks))
-    for tc in tcs:
-        cov += markov_block_covariance(lag, block_s, tc)
-    # Allan variance at T_b: var - cov(lag 1), averaged over the blocks.
-    avar = np.mean(np.diag(cov)) - np.mean(np.diag(cov, 1)) if n_blocks > 1 else np.mean(np.diag(cov))
-    scale = FLICKER_AVAR / avar
-    return cov * scale, tcs, scale
