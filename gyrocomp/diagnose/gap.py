@@ -71,7 +71,7 @@ from gyrocomp import allan
 from gyrocomp.allan.ieee952 import FLICKER_AVAR
 from gyrocomp.effects.likelihood import NoiseBasis, NoiseModel, block_means, markov_block_covariance
 
-__all__ = ["gap", "barnes_b1", "noise_level", "log_chi2_moment", "effective_dof"]
+__all__ = ["gap", "barnes_b1", "noise_level", "log_chi2_moment", "effective_dof", "satterthwaite_dof"]
 
 MAX_EDF_WINDOWS = 512
 """Largest covariance the coloured-noise terms of ``E_0`` build (512 x 512): Allan taus with more
@@ -122,7 +122,18 @@ def effective_dof(form, covariance):
     >>> round(effective_dof(x, np.eye(5)), 6)
     4.0
     """
-    a = form @ covariance @ form.T
+    return satterthwaite_dof(form @ covariance @ form.T)
+
+
+def satterthwaite_dof(a):
+    """Satterthwaite's ``tr(A)^2 / tr(A^2)`` of a quadratic form's symmetric ``A`` (its scale cancels):
+    :func:`effective_dof` from ``A = F covariance F'``, or from a covariance already formed.
+
+    Examples
+    --------
+    >>> satterthwaite_dof(np.eye(3) * 2.5)
+    3.0
+    """
     return float(np.trace(a) ** 2 / np.sum(a * a))
 
 

@@ -19,6 +19,7 @@ import numpy as np
 from scipy import stats
 
 from gyrocomp.diagnose.checks._base import Check, Result
+from gyrocomp.diagnose.gap import satterthwaite_dof
 
 
 def test(ts):
@@ -30,8 +31,7 @@ def test(ts):
         form = diff / np.sqrt(2.0 * (k - 1))
         avar = float(np.sum((form @ ts.r) ** 2))
         mean = float(np.sum(np.diag(cov_d)) / (2.0 * (k - 1)))
-        # Satterthwaite's tr(A)^2 / tr(A^2) of |form r|^2 (gyrocomp.diagnose.gap.effective_dof), A = cov_d / (2 (k - 1)): the scale cancels.
-        nu = float(np.trace(cov_d) ** 2 / np.sum(cov_d * cov_d))
+        nu = satterthwaite_dof(cov_d)  # of |form r|^2, whose A is cov_d / (2 (k - 1))
         x = nu * avar / mean
         p = float(min(1.0, 2.0 * min(stats.chi2.cdf(x, nu), stats.chi2.sf(x, nu))))
         out.append(Result(float(x), p, {"tau_s": float(m * ts.block_s), "ratio": avar / mean, "dof": nu}))
