@@ -9,7 +9,9 @@ evidence that would refuse the noise term, by the test made for that purpose,
 independently of what the diagnosis selected:
 
 * **one event per run** (mode hop: a step at every block; transient: a
-  raised-cosine bump at every centre and width): the noise term (random walk
+  raised-cosine bump at every centre and width; the columns of
+  :mod:`gyrocomp.diagnose.competing`, which the report's competing
+  explanations use): the noise term (random walk
   or flicker, fitted on the fit run by :func:`gyrocomp.diagnose.select.extend`
   and refitted on each run) is refused as a stand-in when, beside the most
   likely single event of the run, it gains less in ``-2 log L`` than it
@@ -57,9 +59,10 @@ sys.path.insert(0, str(HERE.parent))
 import independent_gen as gen  # noqa: E402
 import provenance  # noqa: E402
 from gyrocomp.diagnose import problems  # noqa: E402
+from gyrocomp.diagnose.competing import bump_columns, step_columns  # noqa: E402
 from gyrocomp.effects.likelihood import fit_noise, merge_blocks  # noqa: E402
 from gyrocomp.diagnose.select import extend, fit_baseline  # noqa: E402
-from gyrocomp.diagnose.settings import ChecksSettings  # noqa: E402
+from gyrocomp.diagnose.settings import ChecksSettings, CompetingSettings  # noqa: E402
 from gyrocomp.diagnose.signature import TERMS, check, column_scores, innovations  # noqa: E402
 from gyrocomp.recordings import Recording  # noqa: E402
 
@@ -67,26 +70,8 @@ KINDS = {"bias_step/mode_hop": "step", "transient/gaussian_bump": "bump", "teleg
 """The generator's kinds measured here, and the event each is tested as."""
 MIN_BLOCKS = ChecksSettings().min_step_blocks
 """An event spans at least this many merged blocks (the signature's, as its step scan)."""
-
-
-def step_columns(n):
-    """``1[i >= j]`` for every step position ``j`` at least `MIN_BLOCKS` from either end."""
-    pos = np.arange(MIN_BLOCKS, n - MIN_BLOCKS + 1)
-    return (np.arange(n)[:, None] >= pos[None, :]).astype(float)
-
-
-def bump_columns(n, widths=10):
-    """Raised-cosine bumps ``(1 + cos(pi (i - c) / w)) / 2`` on ``|i - c| < w``: half-widths ``w`` log-spaced from
-    `MIN_BLOCKS` to ``n / 2``, centres ``w / 4`` apart over the run."""
-    i = np.arange(n)
-    cols = []
-    for w in np.geomspace(MIN_BLOCKS, n / 2.0, widths):
-        for c in np.arange(0.0, n + 1.0, max(1.0, w / 4.0)):
-            x = (i - c) / w
-            g = np.where(np.abs(x) < 1.0, 0.5 * (1.0 + np.cos(np.pi * x)), 0.0)
-            if np.count_nonzero(g) >= MIN_BLOCKS:
-                cols.append(g)
-    return np.array(cols).T
+BUMP_WIDTHS = CompetingSettings().bump_widths
+"""The bump's widths, log-spaced from `MIN_BLOCKS` to half the run, as the report's (:func:`gyrocomp.diagnose.competing.bump_columns`)."""
 
 
 def gain_beside_event(y, X, basis, noise, term, G):
@@ -111,7 +96,7 @@ def event_test(problem, model, term, event, draws, seed):
     y, Xm, basis = merge_blocks(problem.y, X, problem.basis, ChecksSettings().agreement_max_blocks)
     free = ("arw",) + tuple(t for t in TERMS if getattr(model.noise, t) > 0.0)
     noise = fit_noise(y, Xm, basis, model.noise, free)[0]
-    G = step_columns(y.size) if event == "step" else bump_columns(y.size)
+    G = (step_columns(y.size, MIN_BLOCKS) if event == "step" else bump_columns(y.size, MIN_BLOCKS, BUMP_WIDTHS))[0]
     gain = gain_beside_event(y, Xm, basis, noise, term, G)
     lower = linalg.cholesky(basis.covariance(noise), lower=True)
     rng = np.random.default_rng(seed)

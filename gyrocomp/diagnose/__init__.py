@@ -32,7 +32,13 @@ measured temperature, white noise) on a fit recording, then
    (:func:`gyrocomp.diagnose.confirm.confirm`, its named rules): a noise
    term without its own signature on all runs, an effect the holdout
    refutes at its fitted shape, an effect that gains nothing beside the
-   structure the tests found on the fit run.
+   structure the tests found on the fit run;
+6. **what else it could be** -- every listed rate random walk or flicker
+   is compared with one time-local event per run, a step (a mode hop) or
+   a bump (a transient), each beside the other
+   (:func:`gyrocomp.diagnose.competing.compare`): the report names the
+   alternative, where it lies and the evidence for each where the pair
+   prefers the event or cannot tell them apart.
 
 The gap and the localization compare each residual with the model's noise
 terms, whose white level is the fit run's sample-level one
@@ -63,6 +69,7 @@ import math
 import os
 
 from gyrocomp.config import settings_dict
+from gyrocomp.diagnose import competing as _competing
 from gyrocomp.diagnose import confirm as _confirm
 from gyrocomp.diagnose import gap as _gap
 from gyrocomp.diagnose import localize
@@ -130,11 +137,14 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
         gaps["selected"] = _gaps(runs, selected)  # 2. how far
         cand = _candidates(runs, search, selected, settings)  # 4. what it could have missed
         local = _localization(runs, {"baseline": search.baseline, "selected": selected}, gaps, settings)  # 3. where
+        listed = [e for e in selected.order if e not in start_effects]
+        rivals = _competing.competing(runs.labelled, selected, listed, settings)  # 6. what else it could be
     return {
-        "selected_effects": [e for e in selected.order if e not in start_effects],
+        "selected_effects": listed,
         "start_effects": list(start_effects),
         "gap": {**_gap_summary(gaps, runs, verdict), "protocol": _protocol(runs.selection, runs.holdout, verdict["unlisted"])},
         "unexplained": verdict,
+        "competing": rivals,
         **({"gap_note": GAP_NOTE} if runs.gapped else {}),
         "candidates": cand,
         "selection": {"error_rate": error_rate(candidates, search.first_step, sum(p.y.size for p in runs.selection),

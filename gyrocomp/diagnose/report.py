@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from gyrocomp.artefacts import artefact_header
+from gyrocomp.diagnose.competing import sentence
 
 __all__ = ["to_json", "to_markdown", "summary_table", "selected_rows", "format_value"]
 
@@ -36,6 +37,10 @@ def to_markdown(report: dict) -> str:
     if blind:
         lines += ["", blind]
     lines += [""] + _unexplained_lines(report)
+    rivals = _competing_sentences(report)
+    if rivals:
+        lines += ["", "**Competing explanations** (a listed noise term against one time-local event per run, each beside the other "
+                  "in BIC):", ""] + [f"- {r}" for r in rivals]
     lines += ["", "| model | gap fit | gap holdout |", "|---|---|---|"]
     for name in ("baseline", "selected"):
         g = report["gap"][name]
@@ -115,7 +120,8 @@ def summary_table(report: dict):
         for row in rows:
             model.add_row(*row)
         parts.append(model)
-    table.caption = "\n".join(x for x in (caption, _no_temperature_line(report)) if x) or None
+    rivals = "\n".join(f"competing: {r}" for r in _competing_sentences(report))
+    table.caption = "\n".join(x for x in (caption, rivals, _no_temperature_line(report)) if x) or None
     return Group(*parts, table)
 
 
@@ -131,6 +137,11 @@ def _sigma(entry):
     if "uncertainty" not in entry:
         return ""
     return "not estimated" if entry["uncertainty"] is None else format_value(entry["uncertainty"])
+
+
+def _competing_sentences(report):
+    """One sentence per competing explanation where the pair prefers the event or cannot tell (:func:`gyrocomp.diagnose.competing.sentence`)."""
+    return [sentence(entry) for entry in report.get("competing") or [] if entry["verdict"] != "noise"]
 
 
 def _no_temperature_line(report):

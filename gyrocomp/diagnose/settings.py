@@ -12,7 +12,9 @@ sections are the tables under it:
 * ``[diagnose.unexplained]`` (:class:`UnexplainedSettings`): the family
   false-alarm rate of the verdict (:func:`gyrocomp.diagnose.unexplained.verdict`);
 * ``[diagnose.confirm]`` (:class:`ConfirmSettings`): the unlisting rules'
-  own numbers (:mod:`gyrocomp.diagnose.confirm`).
+  own numbers (:mod:`gyrocomp.diagnose.confirm`);
+* ``[diagnose.competing]`` (:class:`CompetingSettings`): the events a
+  listed noise term is compared with (:mod:`gyrocomp.diagnose.competing`).
 
 Every default equals the shipped TOML, where each number has its reason
 (``tests/diagnose/test_config.py`` checks both, and that no key appears
@@ -29,7 +31,7 @@ import dataclasses
 from gyrocomp.config import bind, check_tables, load_config
 from gyrocomp.errors import InputError
 
-__all__ = ["DiagnoseSettings", "ChecksSettings", "SignatureSettings", "UnexplainedSettings", "ConfirmSettings", "MOVED", "get_config"]
+__all__ = ["DiagnoseSettings", "ChecksSettings", "SignatureSettings", "UnexplainedSettings", "ConfirmSettings", "CompetingSettings", "MOVED", "get_config"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -86,6 +88,17 @@ class ConfirmSettings:
 
 
 @dataclasses.dataclass(frozen=True)
+class CompetingSettings:
+    """The ``[diagnose.competing]`` table."""
+
+    bump_widths: int = 10
+
+    def __post_init__(self):
+        if self.bump_widths < 1:
+            raise InputError(f"diagnose.competing.bump_widths = {self.bump_widths!r} must be at least 1")
+
+
+@dataclasses.dataclass(frozen=True)
 class DiagnoseSettings:
     """The ``[diagnose]`` table and its sections; defaults equal ``configs/diagnose.toml`` (reasons there)."""
 
@@ -124,6 +137,7 @@ class DiagnoseSettings:
     signature: SignatureSettings = SignatureSettings()
     unexplained: UnexplainedSettings = UnexplainedSettings()
     confirm: ConfirmSettings = ConfirmSettings()
+    competing: CompetingSettings = CompetingSettings()
 
     def __post_init__(self):
         for name in ("block_s", "max_rate_hz", "bias_correlation_max_fraction", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks",
@@ -138,12 +152,13 @@ class DiagnoseSettings:
                                  ("periodic_harmonics", 1, " (the sinusoid)"), ("bias_correlation_search_blocks", 16, ""), ("max_blocks", 16, "")):
             if getattr(self, name) < least:
                 raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be at least {least}{why}")
-        for name in ("checks", "signature", "unexplained", "confirm"):
+        for name in _SECTIONS:
             if not isinstance(getattr(self, name), _SECTIONS[name]):
                 raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be a table ([diagnose.{name}])")
 
 
-_SECTIONS = {"checks": ChecksSettings, "signature": SignatureSettings, "unexplained": UnexplainedSettings, "confirm": ConfirmSettings}
+_SECTIONS = {"checks": ChecksSettings, "signature": SignatureSettings, "unexplained": UnexplainedSettings, "confirm": ConfirmSettings,
+             "competing": CompetingSettings}
 
 MOVED = {
     **{f"unexplained.{k}": f"diagnose.checks.{k}" for k in (
