@@ -56,10 +56,12 @@ from gyrocomp.diagnose.settings import DiagnoseSettings
 from gyrocomp.diagnose.signature import TERMS
 from gyrocomp.effects.likelihood import fit_noise_runs, merge_blocks
 
-__all__ = ["EVENTS", "step_columns", "bump_columns", "compare", "competing", "sentence"]
+__all__ = ["EVENTS", "VERDICTS", "step_columns", "bump_columns", "compare", "competing", "sentence"]
 
 EVENTS = {"step": 2, "bump": 3}
 """The event kinds, and the parameters each event charges per run (time and size; centre, width and size)."""
+VERDICTS = ("noise", "event", "both", "inseparable")
+"""The verdicts of :func:`compare` (the module docstring's table)."""
 
 
 def step_columns(n, min_blocks):
@@ -124,7 +126,9 @@ def compare(runs, model, term, event, settings: DiagnoseSettings = DiagnoseSetti
 
     Returns
     -------
-    dict
+    dict or None
+        None when a run is too short for one event at least
+        ``checks.min_step_blocks`` merged blocks from either end. Else
         ``term``, ``event``, ``verdict`` (module docstring), ``gain``: the
         BIC gains ``noise`` (``T`` over neither), ``event`` (the events over
         neither), ``noise_beside_event`` and ``event_beside_noise``;
@@ -138,11 +142,13 @@ def compare(runs, model, term, event, settings: DiagnoseSettings = DiagnoseSetti
     less = tuple(f for f in free if f != term)
     without = dataclasses.replace(noise, **{term: 0.0})
     merged = [merge_blocks(p.y, p.design_blocks(model.spec)[0], p.basis, settings.checks.agreement_max_blocks) for _, p in runs]
+    columns = [_columns(event, y.size, settings) for y, _, _ in merged]
+    if any(G.shape[1] == 0 for G, _ in columns):
+        return None
     bare, d_0, _ = fit_noise_runs(merged, without, less)
     d_t = fit_noise_runs(merged, noise, free)[1]
     with_event, found = [], []
-    for y, X, basis in merged:
-        G, where = _columns(event, y.size, settings)
+    for (y, X, basis), (G, where) in zip(merged, columns):
         e, Xw, lower = innovations(y, X, basis.covariance(bare))
         j = int(np.argmax(np.abs(column_scores(e, Xw, lower, G)[0])))
         with_event.append((y, np.column_stack([X, G[:, j]]), basis))
@@ -199,9 +205,10 @@ def _event_entry(label, at, size_dps):
 
 
 def competing(runs, model, listed, settings: DiagnoseSettings = DiagnoseSettings()) -> list:
-    """:func:`compare` for every noise term of `listed` in `model` and every event kind of :data:`EVENTS`."""
-    return [compare(runs, model, term, event, settings) for term in TERMS if term in listed and getattr(model.noise, term) > 0.0
-            for event in EVENTS]
+    """:func:`compare` for every noise term of `listed` in `model` and every event kind of :data:`EVENTS` (the runs can hold)."""
+    found = [compare(runs, model, term, event, settings) for term in TERMS if term in listed and getattr(model.noise, term) > 0.0
+             for event in EVENTS]
+    return [entry for entry in found if entry is not None]
 
 
 _WORDS = {"step": "one step per run", "bump": "one bump per run"}

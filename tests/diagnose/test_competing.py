@@ -7,6 +7,8 @@ fitted by :func:`gyrocomp.diagnose.select.extend` as the diagnosis would; the
 event is never given to the code under test.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 from rich.console import Console
@@ -16,6 +18,7 @@ from gyrocomp.diagnose import competing as cp
 from gyrocomp.diagnose.effects import Run, TemperatureScale
 from gyrocomp.diagnose.report import summary_table, to_markdown
 from gyrocomp.diagnose.select import Problem, extend, fit_baseline
+from gyrocomp.diagnose.settings import ChecksSettings
 
 N = 0.005  # white rate noise [deg/s/sqrt(Hz)]
 K = 1.0 / 3600.0 / 60.0  # rate random walk of 1 deg/h/sqrt(h) [deg/s/sqrt(s)]
@@ -36,12 +39,12 @@ def _run(seed, kind, amp, at, rrw=0.0):
     return t, x, temp
 
 
-def _compare(kind, amp, term="rate_random_walk", events=("step", "bump"), rrw=0.0, seed=0):
+def _compare(kind, amp, term="rate_random_walk", events=("step", "bump"), rrw=0.0, seed=0, settings=DiagnoseSettings()):
     recs = [_run(seed, kind, amp, 0.3, rrw), _run(seed + 1000, kind, amp, 0.6, rrw)]
     scale = TemperatureScale.of(recs[0][2])
     runs = [Problem(Run(f"run{k}", t, x, temp, 1.0, 40, 60.0), DiagnoseSettings(), scale, 3) for k, (t, x, temp) in enumerate(recs)]
     model = extend(runs[0], fit_baseline(runs[0]), term)
-    return {e: cp.compare([("fit", runs[0]), ("holdout", runs[1])], model, term, e) for e in events}
+    return {e: cp.compare([("fit", runs[0]), ("holdout", runs[1])], model, term, e, settings) for e in events}
 
 
 def test_a_mode_hop_is_named_one_step_per_run_at_its_times():
@@ -81,6 +84,14 @@ def test_a_weak_random_walk_and_one_step_per_run_cannot_be_told_apart():
     step = _compare("none", 0.0, rrw=K, seed=1, events=("step",))["step"]
     assert step["verdict"] == "inseparable", step
     assert step["gain"]["noise"] > 100.0 and step["gain"]["event"] > 100.0
+
+
+def test_runs_too_short_for_an_event_are_not_compared():
+    # 8 h in 240 merged blocks of 120 s: no step lies 121 blocks from either end; the widest bumps
+    # (full width 120 blocks) still hold 121 blocks inside the run and are compared
+    short = dataclasses.replace(DiagnoseSettings(), checks=dataclasses.replace(ChecksSettings(), min_step_blocks=121))
+    found = _compare("step", 0.002, settings=short)
+    assert found["step"] is None and found["bump"]["verdict"] in cp.VERDICTS
 
 
 @pytest.mark.parametrize(
