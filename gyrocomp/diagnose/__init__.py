@@ -77,7 +77,7 @@ from gyrocomp.diagnose import signature as _signature
 from gyrocomp.diagnose.detectability import detection_limit
 from gyrocomp.diagnose.effects import EFFECTS, effect_params
 from gyrocomp.diagnose.error_rate import error_rate
-from gyrocomp.diagnose.identify import unidentifiable
+from gyrocomp.diagnose.identify import holdout_needs, unidentifiable
 from gyrocomp.diagnose.runs import Runs, _as_list, problems, reduce_recording, segment_lengths
 from gyrocomp.diagnose.select import Fitted, Problem, Search, extend, fit_baseline, holdout_fit, residual_of
 from gyrocomp.diagnose.settings import DiagnoseSettings, get_config
@@ -201,7 +201,10 @@ def _candidates(runs: Runs, search: Search, selected: Fitted, s: DiagnoseSetting
     """Every candidate alone: its parameters, gaps and BIC change; whether the selection runs identify it; its detection limit.
 
     A candidate selected, or not identifiable from the selection runs
-    (:func:`gyrocomp.diagnose.identify.unidentifiable`), gets no detection limit.
+    (:func:`gyrocomp.diagnose.identify.unidentifiable`), gets no detection
+    limit; of the latter, one the holdout needs gets ``holdout_needs``
+    (:func:`gyrocomp.diagnose.identify.holdout_needs`: its p-value there and
+    the holdout's name), else None.
     """
     cand = {}
     for effect, model in search.first_step.items():
@@ -215,12 +218,21 @@ def _candidates(runs: Runs, search: Search, selected: Fitted, s: DiagnoseSetting
     for effect, c in cand.items():
         alone = search.first_step[effect]
         c["not_identifiable"] = unidentifiable(runs.selection, search.baseline, alone, effect, s.identifiable_min_unique)
+        c["holdout_needs"] = _holdout_needs(runs, selected, effect, s) if c["not_identifiable"] else None
         c["detection_limit"] = (
             None
             if effect in selected.order or c["not_identifiable"]
             else detection_limit(runs.selection, selected, effect, alone.spec.get(effect, {}), s.bic_margin, s.detection_power)
         )
     return cand
+
+
+def _holdout_needs(runs: Runs, selected: Fitted, effect, s: DiagnoseSettings):
+    """``{"p", "holdout"}`` when the held-out run needs `effect`, which the selection runs cannot identify; else None."""
+    if runs.holdout is None:
+        return None
+    p = holdout_needs(runs.fit, runs.holdout, selected, effect, s.confirm.replication_alpha, s.identifiable_min_unique)
+    return None if p is None else {"p": p, "holdout": runs.holdout.run.name}
 
 
 def _gap_summary(gaps, runs: Runs, verdict) -> dict:

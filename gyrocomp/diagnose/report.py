@@ -208,7 +208,11 @@ def _limit(effect, candidate, selected):
     if effect in selected:
         return "selected"
     if candidate.get("not_identifiable"):
-        return candidate["not_identifiable"]
+        needs = candidate.get("holdout_needs")
+        if not needs:
+            return candidate["not_identifiable"]
+        return (f"{candidate['not_identifiable']}; the holdout needs it (p = {needs['p']:.2g}): give that run to the selection "
+                f"(--holdout {needs['holdout']} --holdout <another run>)")
     limit = candidate.get("detection_limit")
     if not limit:
         return "beyond search range"

@@ -12,7 +12,7 @@ import pytest
 
 from gyrocomp.diagnose import DiagnoseSettings
 from gyrocomp.diagnose.effects import Run, TemperatureScale
-from gyrocomp.diagnose.identify import unidentifiable
+from gyrocomp.diagnose.identify import holdout_needs, unidentifiable
 from gyrocomp.diagnose.select import Problem, extend, fit_baseline
 
 PROFILES = {
@@ -46,3 +46,32 @@ def test_a_noise_term_is_always_judged_by_its_detection_limit():
     problem = _problem("falls")
     start = fit_baseline(problem)
     assert unidentifiable([problem], start, extend(problem, start, "rate_random_walk"), "rate_random_walk", 0.01) is None
+
+
+def _with_play(profile, amp, seed, scale=None, deadband_c=4.0):
+    """`_problem`'s run with a play hysteresis of +-`amp` deg/s (heating +, cooling -), written here as a numpy loop."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(7200, dtype=float)
+    kt, kc = np.array(PROFILES[profile], dtype=float).T
+    temp = np.interp(t / 60.0, kt, kc)
+    play = np.empty_like(temp)
+    state = temp[0]
+    for i, c in enumerate(temp):
+        state = min(max(state, c - deadband_c / 2), c + deadband_c / 2)
+        play[i] = state
+    x = 0.005 * rng.standard_normal(t.size) + 0.002 * ((temp - 25.0) / 25.0) ** 3 + amp * (temp - play) / (deadband_c / 2)
+    scale = scale or TemperatureScale.of(temp)
+    return Problem(Run(profile, t, x, temp, 1.0, 10, 60.0), DiagnoseSettings(), scale, 3)
+
+
+@pytest.mark.parametrize(("holdout", "amp", "needed"), [("cycles", 0.002, True), ("cycles", 0.0, False), ("falls", 0.002, False)])
+def test_a_holdout_that_needs_what_the_fit_run_cannot_identify(holdout, amp, needed):
+    # a 7.2 deg/h play of 4 degC deadband on both runs; the fit run only falls, so its branch never changes there
+    fit = _with_play("falls", amp, seed=0)
+    held = _with_play(holdout, amp, seed=1, scale=fit.scale)
+    selected = fit_baseline(fit)
+    assert unidentifiable([fit], selected, extend(fit, selected, "hysteresis"), "hysteresis", 0.01) is not None
+    p = holdout_needs(fit, held, selected, "hysteresis", 0.01, 0.01)
+    assert (p is not None) == needed, p
+    if needed:
+        assert p < 1e-6

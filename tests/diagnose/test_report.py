@@ -58,3 +58,12 @@ def test_a_recording_without_temperature_says_what_it_cannot_tell_apart(render):
     assert "No temperature channel" not in render(_report())
     text = render(_report(skipped={"temp_rate": "no temperature column: temperature polynomial and temperature effects skipped"}))
     assert "No temperature channel" in text and "cannot be told from a slow noise" in text.replace("\n", " ").replace("  ", " ")
+
+
+@pytest.mark.parametrize("render", [to_markdown, _terminal])
+def test_a_candidate_the_holdout_needs_but_the_selection_cannot_identify_says_which_run_to_add(render):
+    report = _report()
+    report["candidates"]["hysteresis"]["holdout_needs"] = {"p": 3e-8, "holdout": "oven_test.parquet"}
+    text = " ".join(render(report).split())
+    assert ("its branch never changes; the holdout needs it (p = 3e-08): give that run to the selection "
+            "(--holdout oven_test.parquet --holdout <another run>)") in text
