@@ -36,7 +36,8 @@ measured temperature, white noise) on a fit recording, then
 6. **what else it could be** -- every listed rate random walk or flicker
    is compared with one time-local event per run, a step (a mode hop) or
    a bump (a transient), each beside the other
-   (:func:`gyrocomp.diagnose.competing.compare`): the report names the
+   (:func:`gyrocomp.diagnose.competing.compare`), and a flicker with
+   popcorn by its signature's test of Gaussian levels: the report names the
    alternative, where it lies and the evidence for each where the pair
    prefers the event or cannot tell them apart.
 
@@ -138,7 +139,7 @@ def diagnose(fit, holdout=None, settings: DiagnoseSettings = DiagnoseSettings(),
         cand = _candidates(runs, search, selected, settings)  # 4. what it could have missed
         local = _localization(runs, {"baseline": search.baseline, "selected": selected}, gaps, settings)  # 3. where
         listed = [e for e in selected.order if e not in start_effects]
-        rivals = _competing.competing(runs.labelled, selected, listed, settings)  # 6. what else it could be
+        rivals = _competing.competing(runs.labelled, selected, listed, verdict["signatures"], settings)  # 6. what else it could be
     return {
         "selected_effects": listed,
         "start_effects": list(start_effects),

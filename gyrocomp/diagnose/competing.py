@@ -34,6 +34,15 @@ gains              gains              ``both``: the term and the events
 does not gain      does not gain      ``inseparable`` when the events alone gain, else ``noise``
 =================  =================  ===============================================
 
+A listed flicker is also compared with popcorn, a noise switching between
+two levels (``event`` ``two_levels``), by its signature's own test of
+Gaussian levels (:mod:`gyrocomp.diagnose.checks.levels`: the kurtosis of its
+levels, and the likelihood ratio of two levels to a Gauss-Markov wander
+against Gaussian draws): ``event`` below the test's Bonferroni share in the
+signature, ``inseparable`` below the signature's ``refusal_alpha`` (the
+evidence of one test at the level the term is judged at, which the
+family's share does not reach), else ``noise``.
+
 Only the report reads the verdict; the selection and the unlisting rules
 (:mod:`gyrocomp.diagnose.confirm`) do not. It is evidence, not a test at a
 stated level: the margin is the selection's, and the levels are maximum
@@ -56,7 +65,7 @@ from gyrocomp.diagnose.settings import DiagnoseSettings
 from gyrocomp.diagnose.signature import TERMS
 from gyrocomp.effects.likelihood import fit_noise_runs, merge_blocks
 
-__all__ = ["EVENTS", "VERDICTS", "step_columns", "bump_columns", "compare", "competing", "sentence"]
+__all__ = ["EVENTS", "VERDICTS", "step_columns", "bump_columns", "compare", "two_levels", "competing", "sentence"]
 
 EVENTS = {"step": 2, "bump": 3}
 """The event kinds, and the parameters each event charges per run (time and size; centre, width and size)."""
@@ -204,10 +213,31 @@ def _event_entry(label, at, size_dps):
     return {"run": label, **at, "size_deg_h": float(size_dps) * 3600.0}
 
 
-def competing(runs, model, listed, settings: DiagnoseSettings = DiagnoseSettings()) -> list:
-    """:func:`compare` for every noise term of `listed` in `model` and every event kind of :data:`EVENTS` (the runs can hold)."""
+def two_levels(signature, refusal_alpha) -> dict | None:
+    """A listed flicker against popcorn, from its signature in the verdict (``unexplained.signatures``; module docstring).
+
+    Examples
+    --------
+    >>> sig = {"alpha": 0.0005, "levels": {"p": 0.004, "by": "two_levels", "two_levels_z": 2.9, "two_levels_gain": 14.0}}
+    >>> two_levels(sig, 0.01)["verdict"]
+    'inseparable'
+    """
+    levels = (signature or {}).get("levels")
+    if levels is None:
+        return None
+    p = levels["p"]
+    verdict = "event" if p < signature["alpha"] else "inseparable" if p < refusal_alpha else "noise"
+    return {"term": "bias_instability", "event": "two_levels", "verdict": verdict, "levels": levels,
+            "alpha": signature["alpha"], "refusal_alpha": refusal_alpha}
+
+
+def competing(runs, model, listed, signatures, settings: DiagnoseSettings = DiagnoseSettings()) -> list:
+    """:func:`compare` for every noise term of `listed` in `model` and every event kind of :data:`EVENTS` (the runs
+    can hold), and :func:`two_levels` for a listed flicker from its entry in `signatures` (``unexplained.signatures``)."""
     found = [compare(runs, model, term, event, settings) for term in TERMS if term in listed and getattr(model.noise, term) > 0.0
              for event in EVENTS]
+    if "bias_instability" in listed:
+        found.append(two_levels(signatures.get("bias_instability"), settings.signature.refusal_alpha))
     return [entry for entry in found if entry is not None]
 
 
@@ -215,7 +245,9 @@ _WORDS = {"step": "one step per run", "bump": "one bump per run"}
 
 
 def sentence(entry) -> str:
-    """The report's sentence for one :func:`compare` result whose verdict is not ``noise``."""
+    """The report's sentence for one :func:`compare` or :func:`two_levels` result whose verdict is not ``noise``."""
+    if entry["event"] == "two_levels":
+        return _two_levels_sentence(entry)
     term, g = entry["term"], entry["gain"]
     where = "; ".join(_where(r, entry["event"]) for r in entry["runs"])
     alt = f"{_WORDS[entry['event']]} ({where})"
@@ -234,3 +266,12 @@ def _where(run, event):
     """``fit: at 3.42 h, -8.7 deg/h`` (a bump: its full width too)."""
     width = f", {run['width_s'] / 3600.0:.2f} h wide" if event == "bump" else ""
     return f"{run['run']}: at {run['time_s'] / 3600.0:.2f} h{width}, {run['size_deg_h']:+.1f} deg/h"
+
+
+def _two_levels_sentence(entry):
+    lv = entry["levels"]
+    lead = ("the pair prefers popcorn (a noise switching between two levels) to bias_instability" if entry["verdict"] == "event"
+            else "bias_instability or popcorn (a noise switching between two levels)")
+    return (f"{lead}: two levels gain {lv['two_levels_gain']:.1f} in log-likelihood over a Gauss-Markov wander, z = "
+            f"{lv['two_levels_z']:.1f} against Gaussian draws; Gaussian-levels test p = {lv['p']:.2g} (the signature refuses below "
+            f"{entry['alpha']:.2g}, the term's rate is {entry['refusal_alpha']:g})")

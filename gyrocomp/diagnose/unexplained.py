@@ -134,7 +134,8 @@ def assess(runs, model, settings, baseline_residuals):
     for term in TERMS:
         if term in getattr(model, "order", ()) and getattr(model.noise, term) > 0.0:
             sig = signature.check(term, [p for _, p in runs], model, s)
-            signatures[term] = {"ok": sig.ok, "own_ok": sig.own_ok, "tone_repeats": sig.tone_repeats, "reasons": list(sig.reasons)}
+            signatures[term] = {"ok": sig.ok, "own_ok": sig.own_ok, "tone_repeats": sig.tone_repeats, "reasons": list(sig.reasons),
+                                "alpha": sig.stats.get("alpha"), "levels": _levels_evidence(sig.stats.get("levels"))}
             if not sig.ok:
                 where.append({"run": "all", "test": f"signature:{term}", "p": sig.stats.get("alpha")})
                 hints.append(f"the selected {term} does not show its own signature: " + "; ".join(sig.reasons[:3]))
@@ -153,6 +154,14 @@ def assess(runs, model, settings, baseline_residuals):
         "tests": {pr.label: {name: _public(r) for name, r in pr.tests.items()} for pr in prepared},
         "unlisted": [],
     }, prepared
+
+
+def _levels_evidence(levels):
+    """A flicker's Gaussian-levels test for the report (:mod:`gyrocomp.diagnose.checks.levels`): its p and the two-level statistic; None for a random walk."""
+    if levels is None:
+        return None
+    two = levels["two_levels"]
+    return {"p": levels["p"], "by": levels["by"], "two_levels_z": two["z"], "two_levels_gain": two["gain"]}
 
 
 def holm(p_values, alpha):

@@ -12,6 +12,7 @@ import dataclasses
 import numpy as np
 import pytest
 from rich.console import Console
+from scipy.signal import lfilter
 
 from gyrocomp.diagnose import DiagnoseSettings
 from gyrocomp.diagnose import competing as cp
@@ -19,6 +20,7 @@ from gyrocomp.diagnose.effects import Run, TemperatureScale
 from gyrocomp.diagnose.report import summary_table, to_markdown
 from gyrocomp.diagnose.select import Problem, extend, fit_baseline
 from gyrocomp.diagnose.settings import ChecksSettings
+from gyrocomp.diagnose.unexplained import assess
 
 N = 0.005  # white rate noise [deg/s/sqrt(Hz)]
 K = 1.0 / 3600.0 / 60.0  # rate random walk of 1 deg/h/sqrt(h) [deg/s/sqrt(s)]
@@ -129,3 +131,39 @@ def test_the_report_names_the_alternative_with_the_numbers_of_the_json(render):
     assert "the pair prefers one step per run (fit: at 1.87 h, -2.5 deg/h; holdout: at 4.63 h, +3.6 deg/h) to rate_random_walk" in preferred
     quiet = dict(entry, verdict="noise")
     assert "one step per run" not in render(_report([quiet]))
+
+
+@pytest.mark.parametrize(("p", "verdict"), [(0.0001, "event"), (0.004, "inseparable"), (0.2, "noise")])
+def test_popcorn_against_a_flicker_is_read_from_its_signatures_levels_test(p, verdict):
+    sig = {"alpha": 0.0005, "levels": {"p": p, "by": "two_levels", "two_levels_z": 2.9, "two_levels_gain": 14.0}}
+    assert cp.two_levels(sig, 0.01)["verdict"] == verdict
+    assert cp.two_levels({"alpha": None, "levels": None}, 0.01) is None  # a random walk has no levels test
+
+
+@pytest.mark.parametrize("render", [to_markdown, _terminal])
+def test_the_report_names_popcorn_with_its_evidence(render):
+    entry = cp.two_levels({"alpha": 0.00042, "levels": {"p": 0.0031, "by": "two_levels", "two_levels_z": 2.74,
+                                                       "two_levels_gain": 15.3}}, 0.01)
+    text = " ".join(render(_report([entry])).split())
+    assert ("bias_instability or popcorn (a noise switching between two levels): two levels gain 15.3 in log-likelihood over "
+            "a Gauss-Markov wander, z = 2.7 against Gaussian draws; Gaussian-levels test p = 0.0031 (the signature refuses "
+            "below 0.00042, the term's rate is 0.01)") in text
+
+
+def test_a_flickers_signature_in_the_verdict_carries_its_levels_evidence():
+    # a true 3 deg/h flicker (Gauss-Markov draws of 600 s here), both runs: the verdict's signature holds the levels test
+    rng = np.random.default_rng(5)
+    recs = []
+    for k in range(2):
+        t, x, temp = _run(20 + k, "none", 0.0, 0.5)
+        a = np.exp(-1.0 / 600.0)
+        w = rng.standard_normal(t.size) * 3.0 / 3600.0 * np.sqrt(1 - a * a)
+        recs.append((t, x + lfilter([1.0], [1.0, -a], w), temp))
+    scale = TemperatureScale.of(recs[0][2])
+    runs = [Problem(Run(f"run{k}", t, x, temp, 1.0, 40, 60.0), DiagnoseSettings(), scale, 3) for k, (t, x, temp) in enumerate(recs)]
+    model = extend(runs[0], fit_baseline(runs[0]), "bias_instability")
+    verdict, _ = assess([("fit", runs[0]), ("holdout", runs[1])], model, DiagnoseSettings(), None)
+    levels = verdict["signatures"]["bias_instability"]["levels"]
+    assert 0.0 <= levels["p"] <= 1.0 and levels["by"] in ("kurtosis", "two_levels")
+    entry = cp.competing([("fit", runs[0]), ("holdout", runs[1])], model, ["bias_instability"], verdict["signatures"])[-1]
+    assert entry["event"] == "two_levels" and entry["levels"] == levels
