@@ -32,7 +32,6 @@ giving the holdout to the selection.
 from __future__ import annotations
 
 import numpy as np
-
 from scipy import stats
 
 from gyrocomp.diagnose.effects import PER_RUN
