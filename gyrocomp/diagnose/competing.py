@@ -142,7 +142,8 @@ def compare(runs, model, term, event, settings: DiagnoseSettings = DiagnoseSetti
         BIC gains ``noise`` (``T`` over neither), ``event`` (the events over
         neither), ``noise_beside_event`` and ``event_beside_noise``;
         ``runs``: per run its ``run`` label, the event's ``time_s`` (a step's
-        time, a bump's centre, from the run's first block), ``width_s``
+        time, a bump's centre, from the run's first sample, gaps of a run in
+        segments counted), ``width_s``
         (a bump's full width at half height) and ``size_deg_h`` (fitted
         beside the other terms, without ``T``).
     """
@@ -150,18 +151,19 @@ def compare(runs, model, term, event, settings: DiagnoseSettings = DiagnoseSetti
     free = ("arw",) + tuple(t for t in TERMS if getattr(noise, t) > 0.0)
     less = tuple(f for f in free if f != term)
     without = dataclasses.replace(noise, **{term: 0.0})
-    merged = [merge_blocks(p.y, p.design_blocks(model.spec)[0], p.basis, settings.checks.agreement_max_blocks) for _, p in runs]
+    max_blocks = settings.checks.agreement_max_blocks
+    merged = [merge_blocks(p.y, p.design_blocks(model.spec)[0], p.basis, max_blocks) for _, p in runs]
     columns = [_columns(event, y.size, settings) for y, _, _ in merged]
     if any(G.shape[1] == 0 for G, _ in columns):
         return None
     bare, d_0, _ = fit_noise_runs(merged, without, less)
     d_t = fit_noise_runs(merged, noise, free)[1]
     with_event, found = [], []
-    for (y, X, basis), (G, where) in zip(merged, columns):
+    for (_, p), (y, X, basis), (G, where) in zip(runs, merged, columns):
         e, Xw, lower = innovations(y, X, basis.covariance(bare))
         j = int(np.argmax(np.abs(column_scores(e, Xw, lower, G)[0])))
         with_event.append((y, np.column_stack([X, G[:, j]]), basis))
-        found.append(_place(where, j, basis.block_s))
+        found.append(_place(where, j, _merged_starts(p, y.size, max_blocks), basis.block_s))
     _, d_e, betas = fit_noise_runs(with_event, without, less)
     d_te = fit_noise_runs(with_event, noise, free)[1]
     log_n = np.log(sum(y.size for y, _, _ in merged))
@@ -201,11 +203,21 @@ def _verdict(gain, margin):
     return "inseparable"
 
 
-def _place(where, j, block_s):
-    """Column `j`'s event in seconds from the run's first block (block ``i`` spans ``[i, i + 1) block_s``)."""
+def _merged_starts(problem, k, max_blocks):
+    """The start of each of the `k` merged blocks [s from the run's first sample]: across a gap of a run in segments too."""
+    run = problem.run
+    starts = run.block_start_s if run.block_start_s is not None else np.arange(run.n_blocks) * run.block_s
+    return starts[:: -(-problem.y.size // max_blocks)][:k]
+
+
+def _place(where, j, starts, block_s):
+    """Column `j`'s event in seconds from the run's first sample: a step's time, a bump's centre and full width
+    (merged block ``i`` spans ``[starts[i], starts[i] + block_s)``)."""
     if "block" in where:
-        return {"time_s": float(where["block"][j]) * block_s}
-    return {"time_s": (float(where["centre"][j]) + 0.5) * block_s, "width_s": float(where["width"][j]) * block_s}
+        return {"time_s": float(starts[where["block"][j]])}
+    c = float(where["centre"][j])
+    i = min(int(c), starts.size - 1)
+    return {"time_s": float(starts[i]) + (c - i + 0.5) * block_s, "width_s": float(where["width"][j]) * block_s}
 
 
 def _event_entry(label, at, size_dps):

@@ -167,3 +167,18 @@ def test_a_flickers_signature_in_the_verdict_carries_its_levels_evidence():
     assert 0.0 <= levels["p"] <= 1.0 and levels["by"] in ("kurtosis", "two_levels")
     entry = cp.competing([("fit", runs[0]), ("holdout", runs[1])], model, ["bias_instability"], verdict["signatures"])[-1]
     assert entry["event"] == "two_levels" and entry["levels"] == levels
+
+
+def test_an_events_time_counts_the_gaps_of_a_run_in_segments():
+    # the fit run's 8 h in two segments, 2 h of nothing between 3 h and 5 h: a step at 6.4 h of clock time
+    t, x, temp = _run(0, "none", 0.0, 0.5)
+    clock = np.where(t < 3 * 3600, t, t + 2 * 3600.0)
+    x = x + 0.002 * (clock >= 6.4 * 3600)
+    held = _run(1000, "step", 0.002, 0.6)
+    scale = TemperatureScale.of(temp)
+    runs = [Problem(Run("gapped", clock, x, temp, 1.0, 40, 60.0, gapped=True), DiagnoseSettings(), scale, 3),
+            Problem(Run("held", *held[:2], held[2], 1.0, 40, 60.0), DiagnoseSettings(), scale, 3)]
+    model = extend(runs[0], fit_baseline(runs[0]), "rate_random_walk")
+    step = cp.compare([("fit", runs[0]), ("holdout", runs[1])], model, "rate_random_walk", "step")
+    assert abs(step["runs"][0]["time_s"] / 3600.0 - 6.4) < 0.1, step["runs"]
+    assert abs(step["runs"][1]["time_s"] / 3600.0 - 0.6 * HOURS) < 0.1, step["runs"]
