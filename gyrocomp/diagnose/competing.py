@@ -61,6 +61,7 @@ import dataclasses
 import numpy as np
 
 from gyrocomp.diagnose.checks._linear import column_scores, innovations
+from gyrocomp.diagnose.checks.step import step_positions
 from gyrocomp.diagnose.settings import DiagnoseSettings
 from gyrocomp.diagnose.signature import TERMS
 from gyrocomp.effects.likelihood import fit_noise_runs, merge_blocks
@@ -74,7 +75,7 @@ VERDICTS = ("noise", "event", "both", "inseparable")
 
 
 def step_columns(n, min_blocks):
-    """``1[i >= j]`` for every ``j`` at least `min_blocks` from either end, and the ``j``.
+    """``1[i >= j]`` for every ``j`` of the step scan (:func:`gyrocomp.diagnose.checks.step.step_positions`), and the ``j``.
 
     Examples
     --------
@@ -82,7 +83,7 @@ def step_columns(n, min_blocks):
     >>> G.T.astype(int).tolist(), where["block"].tolist()
     ([[0, 0, 1, 1, 1, 1], [0, 0, 0, 1, 1, 1], [0, 0, 0, 0, 1, 1]], [2, 3, 4])
     """
-    pos = np.arange(min_blocks, n - min_blocks + 1)
+    pos = step_positions(n, min_blocks)
     return (np.arange(n)[:, None] >= pos[None, :]).astype(float), {"block": pos}
 
 
@@ -118,8 +119,10 @@ def _columns(event, n, settings: DiagnoseSettings):
     return bump_columns(n, settings.checks.min_step_blocks, settings.competing.bump_widths)
 
 
-def compare(runs, model, term, event, settings: DiagnoseSettings = DiagnoseSettings()) -> dict:
-    """Noise term `term` of `model` against one `event` per run (module docstring).
+def compare(runs, model, term, events=tuple(EVENTS), settings: DiagnoseSettings = DiagnoseSettings()) -> dict:
+    """Noise term `term` of `model` against one event per run, for each kind of `events` (module docstring).
+
+    The fits without an event (``D_0``, ``D_T``) are made once for all kinds.
 
     Parameters
     ----------
@@ -128,24 +131,23 @@ def compare(runs, model, term, event, settings: DiagnoseSettings = DiagnoseSetti
     model : gyrocomp.diagnose.select.Fitted
         A model with `term` in its noise.
     term : {"rate_random_walk", "bias_instability"}
-    event : {"step", "bump"}
+    events : sequence of {"step", "bump"}
     settings : DiagnoseSettings
         ``bic_margin``, ``checks.agreement_max_blocks``, ``checks.min_step_blocks``
         and ``competing.bump_widths``.
 
     Returns
     -------
-    dict or None
-        None when a run is too short for one event at least
+    dict
+        Per event kind, None when a run is too short for one event at least
         ``checks.min_step_blocks`` merged blocks from either end. Else
         ``term``, ``event``, ``verdict`` (module docstring), ``gain``: the
         BIC gains ``noise`` (``T`` over neither), ``event`` (the events over
         neither), ``noise_beside_event`` and ``event_beside_noise``;
         ``runs``: per run its ``run`` label, the event's ``time_s`` (a step's
         time, a bump's centre, from the run's first sample, gaps of a run in
-        segments counted), ``width_s``
-        (a bump's full width at half height) and ``size_deg_h`` (fitted
-        beside the other terms, without ``T``).
+        segments counted), ``width_s`` (a bump's full width at half height)
+        and ``size_deg_h`` (fitted beside the other terms, without ``T``).
     """
     noise = model.noise
     free = ("arw",) + tuple(t for t in TERMS if getattr(noise, t) > 0.0)
@@ -153,34 +155,38 @@ def compare(runs, model, term, event, settings: DiagnoseSettings = DiagnoseSetti
     without = dataclasses.replace(noise, **{term: 0.0})
     max_blocks = settings.checks.agreement_max_blocks
     merged = [merge_blocks(p.y, p.design_blocks(model.spec)[0], p.basis, max_blocks) for _, p in runs]
-    columns = [_columns(event, y.size, settings) for y, _, _ in merged]
-    if any(G.shape[1] == 0 for G, _ in columns):
-        return None
+    columns = {event: [_columns(event, y.size, settings) for y, _, _ in merged] for event in events}
+    held = [event for event in events if all(G.shape[1] for G, _ in columns[event])]
+    if not held:
+        return dict.fromkeys(events)
     bare, d_0, _ = fit_noise_runs(merged, without, less)
     d_t = fit_noise_runs(merged, noise, free)[1]
-    with_event, found = [], []
-    for (_, p), (y, X, basis), (G, where) in zip(runs, merged, columns):
-        e, Xw, lower = innovations(y, X, basis.covariance(bare))
-        j = int(np.argmax(np.abs(column_scores(e, Xw, lower, G)[0])))
-        with_event.append((y, np.column_stack([X, G[:, j]]), basis))
-        found.append(_place(where, j, _merged_starts(p, y.size, max_blocks), basis.block_s))
-    _, d_e, betas = fit_noise_runs(with_event, without, less)
-    d_te = fit_noise_runs(with_event, noise, free)[1]
+    innov = [innovations(y, X, basis.covariance(bare)) for y, X, basis in merged]
     log_n = np.log(sum(y.size for y, _, _ in merged))
-    k_event = EVENTS[event] * len(merged)
-    gain = {
-        "noise": d_0 - d_t - log_n,
-        "event": d_0 - d_e - k_event * log_n,
-        "noise_beside_event": d_e - d_te - log_n,
-        "event_beside_noise": d_t - d_te - k_event * log_n,
-    }
-    return {
-        "term": term,
-        "event": event,
-        "verdict": _verdict(gain, settings.bic_margin),
-        "gain": {k: float(v) for k, v in gain.items()},
-        "runs": [_event_entry(label, at, beta[-1]) for (label, _), at, beta in zip(runs, found, betas)],
-    }
+    out = dict.fromkeys(events)
+    for event in held:
+        with_event, found = [], []
+        for (_, p), (y, X, basis), (e, Xw, lower), (G, where) in zip(runs, merged, innov, columns[event]):
+            j = int(np.argmax(np.abs(column_scores(e, Xw, lower, G)[0])))
+            with_event.append((y, np.column_stack([X, G[:, j]]), basis))
+            found.append(_place(where, j, _merged_starts(p, y.size, max_blocks), basis.block_s))
+        _, d_e, betas = fit_noise_runs(with_event, without, less)
+        d_te = fit_noise_runs(with_event, noise, free)[1]
+        k_event = EVENTS[event] * len(merged)
+        gain = {
+            "noise": d_0 - d_t - log_n,
+            "event": d_0 - d_e - k_event * log_n,
+            "noise_beside_event": d_e - d_te - log_n,
+            "event_beside_noise": d_t - d_te - k_event * log_n,
+        }
+        out[event] = {
+            "term": term,
+            "event": event,
+            "verdict": _verdict(gain, settings.bic_margin),
+            "gain": {k: float(v) for k, v in gain.items()},
+            "runs": [_event_entry(label, at, beta[-1]) for (label, _), at, beta in zip(runs, found, betas)],
+        }
+    return out
 
 
 def _verdict(gain, margin):
@@ -246,8 +252,8 @@ def two_levels(signature, refusal_alpha) -> dict | None:
 def competing(runs, model, listed, signatures, settings: DiagnoseSettings = DiagnoseSettings()) -> list:
     """:func:`compare` for every noise term of `listed` in `model` and every event kind of :data:`EVENTS` (the runs
     can hold), and :func:`two_levels` for a listed flicker from its entry in `signatures` (``unexplained.signatures``)."""
-    found = [compare(runs, model, term, event, settings) for term in TERMS if term in listed and getattr(model.noise, term) > 0.0
-             for event in EVENTS]
+    found = [entry for term in TERMS if term in listed and getattr(model.noise, term) > 0.0
+             for entry in compare(runs, model, term, tuple(EVENTS), settings).values()]
     if "bias_instability" in listed:
         found.append(two_levels(signatures.get("bias_instability"), settings.signature.refusal_alpha))
     return [entry for entry in found if entry is not None]

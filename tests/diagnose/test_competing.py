@@ -46,7 +46,7 @@ def _compare(kind, amp, term="rate_random_walk", events=("step", "bump"), rrw=0.
     scale = TemperatureScale.of(recs[0][2])
     runs = [Problem(Run(f"run{k}", t, x, temp, 1.0, 40, 60.0), DiagnoseSettings(), scale, 3) for k, (t, x, temp) in enumerate(recs)]
     model = extend(runs[0], fit_baseline(runs[0]), term)
-    return {e: cp.compare([("fit", runs[0]), ("holdout", runs[1])], model, term, e, settings) for e in events}
+    return cp.compare([("fit", runs[0]), ("holdout", runs[1])], model, term, events, settings)
 
 
 def test_a_mode_hop_is_named_one_step_per_run_at_its_times():
@@ -179,6 +179,6 @@ def test_an_events_time_counts_the_gaps_of_a_run_in_segments():
     runs = [Problem(Run("gapped", clock, x, temp, 1.0, 40, 60.0, gapped=True), DiagnoseSettings(), scale, 3),
             Problem(Run("held", *held[:2], held[2], 1.0, 40, 60.0), DiagnoseSettings(), scale, 3)]
     model = extend(runs[0], fit_baseline(runs[0]), "rate_random_walk")
-    step = cp.compare([("fit", runs[0]), ("holdout", runs[1])], model, "rate_random_walk", "step")
+    step = cp.compare([("fit", runs[0]), ("holdout", runs[1])], model, "rate_random_walk", ("step",))["step"]
     assert abs(step["runs"][0]["time_s"] / 3600.0 - 6.4) < 0.1, step["runs"]
     assert abs(step["runs"][1]["time_s"] / 3600.0 - 0.6 * HOURS) < 0.1, step["runs"]

@@ -14,7 +14,18 @@ import numpy as np
 from gyrocomp.diagnose.checks._base import Check, Result, log10
 from gyrocomp.diagnose.checks._linear import threshold_scan
 
-__all__ = ["step_scan", "test", "CHECK"]
+__all__ = ["step_positions", "step_scan", "test", "CHECK"]
+
+
+def step_positions(n, min_blocks):
+    """The first blocks after a step that the scan tries: every one at least `min_blocks` from either end of `n`.
+
+    Examples
+    --------
+    >>> step_positions(10, 4).tolist()
+    [4, 5, 6]
+    """
+    return np.arange(min_blocks, n - min_blocks + 1)
 
 
 def step_scan(e, Xw, lower, min_blocks=4):
@@ -31,7 +42,7 @@ def step_scan(e, Xw, lower, min_blocks=4):
         ``log_p`` (natural log of the bound).
     """
     n = e.size
-    pos = np.arange(min_blocks, n - min_blocks + 1)
+    pos = step_positions(n, min_blocks)
     if not pos.size:
         return {"stat": 0.0, "block": 0, "size": 0.0, "p": 1.0, "log_p": 0.0}
     found = threshold_scan(e, Xw, lower, np.arange(n), pos)
