@@ -165,7 +165,9 @@ def greybox_of(body: dict, runs: list) -> tuple[dict, dict, dict]:
     from gyrocomp.pipeline.greybox import train_greybox
 
     selected = list(body["selected_effects"])
-    terms = [t for t in TERMS if t in selected]
+    warmup = body["models"]["selected"]["params"].get("warmup", {})
+    joined = ["second_warmup"] if "slow_tau_s" in warmup else []  # a warm-up of two time constants
+    terms = [t for t in TERMS if t in selected + joined]
     config = apply_overrides(load_config("greybox"), [f"greybox.terms={terms!r}".replace("'", '"'), 'greybox.selection="all"'])
     models, units = train_greybox(runs, config, source="diagnose --model-out")
     not_fitted = [r for m in models.values() for r in m["not_fitted"]]

@@ -139,22 +139,97 @@ def _best_in_form(problem: Problem, parts, effect: str, form: dict):
     grid = kind.grid(problem.settings, length_s, run.block_s)
     if effect == "periodic":
         return _periodic_waveform(parts, grid, problem.settings, length_s, run.block_s, lambda p: deviance(form | p))
+    if kind.paired(form, problem.settings, length_s):
+        return _best_pair(parts, effect, form, grid, *kind.paired(form, problem.settings, length_s), deviance)
     values = np.array([deviance(form | {key: float(v)}) for v in grid])
     value, best = _refine(grid, values, lambda v: deviance(form | {key: v}))
     return form | {key: value}, best
 
 
 def _refine(grid, values, deviance):
-    """The grid point of least deviance refined (bounded, in log scale) between its neighbours: ``(value, deviance)``."""
+    """The grid point of least deviance refined (bounded, in log scale) between its neighbours: ``(value, deviance)``.
+
+    The grid may run either way (a period grid descends)."""
     i = int(np.argmin(values))
-    a, b = sorted((np.log(grid[max(i - 1, 0)]), np.log(grid[min(i + 1, grid.size - 1)])))
+    lo, hi = sorted((grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]))
+    return _refine_between(lo, hi, float(grid[i]), float(values[i]), deviance)
+
+
+def _refine_between(lo, hi, x0, d0, deviance):
+    """`x0` (of deviance `d0`) refined (bounded, in log scale) between `lo` and `hi`: ``(value, deviance)``."""
+    a, b = np.log(lo), np.log(hi)
     if b > a:
         best = optimize.minimize_scalar(
             lambda z: deviance(float(np.exp(z))), bounds=(a, b), method="bounded", options={"xatol": 1e-3}
         )
-        if best.fun < values[i]:
+        if best.fun < d0:
             return float(np.exp(best.x)), float(best.fun)
-    return float(grid[i]), float(values[i])
+    return x0, d0
+
+
+def _best_pair(parts, effect, form, grid, key2, ratio, top, deviance):
+    """Both nonlinear parameters of a paired form (:meth:`~gyrocomp.effects.vocabulary.Effect.paired`): ``(params, -2 log L)``.
+
+    Every pair of grid values ``(x, x2)`` with ``ratio x <= x2 <= top`` is
+    scored at once (:func:`_pair_grid_deviances`); the best pair's ``x`` is
+    then refined between its grid neighbours with ``x2`` held, and ``x2``
+    with the refined ``x`` held, neither crossing the ratio nor `top`.
+
+    An ``x2`` that settles at `top` asks for more than `top`, which the run
+    cannot tell from another effect (a warm-up slower than a third of the run
+    is a drift there, ``rate_ramp``'s): the form is then given an infinite
+    deviance (never kept), as on a run too short for any pair.
+    """
+    key = KINDS[effect].nonlinear
+    i, j = np.triu_indices(grid.size, 1)
+    keep = (grid[j] >= ratio * grid[i]) & (grid[j] <= top)
+    i, j = i[keep], j[keep]
+    if not i.size:
+        return form | {key: float(grid[0]), key2: float(ratio * grid[0])}, np.inf
+    values = _pair_grid_deviances(parts, effect, grid, i, j)
+    b = int(np.argmin(values))
+    x, x2, best = float(grid[i[b]]), float(grid[j[b]]), float(values[b])
+    last = grid.size - 1
+    x, best = _refine_between(grid[max(i[b] - 1, 0)], min(grid[min(i[b] + 1, last)], x2 / ratio), x, best, lambda v: deviance(form | {key: v, key2: x2}))
+    x2, best = _refine_between(max(grid[max(j[b] - 1, 0)], x * ratio), min(grid[min(j[b] + 1, last)], top), x2, best,
+                               lambda v: deviance(form | {key: x, key2: v}))
+    at_top = np.log(top / x2) < 1e-2
+    return form | {key: x, key2: x2}, (np.inf if at_top else best)
+
+
+def _pair_grid_deviances(parts, effect, grid, first, second):
+    """:func:`_joint_deviance` of `effect`'s paired form at the grid pairs ``(grid[first], grid[second])``, in a few
+    matrix products.
+
+    The paired form's columns are the plain form's at either value, shared
+    by the runs; the plain form's whitened columns at every grid value
+    (:meth:`_JointPart.candidate`, cached) stacked over the runs as ``C``, the
+    deviance of a pair ``S`` is ``constant + |y_perp|^2 - b_S' A_SS^+ b_S``
+    with ``b = C' y_perp`` and ``A = C'C - (U'C)'(U'C)`` (:func:`_base_projection`).
+    """
+    key = KINDS[effect].nonlinear
+    u, y_perp, residual = _base_projection(parts)
+    c = np.vstack([np.hstack([part.candidate(effect, {key: float(v)})[0] for v in grid]) for part in parts])
+    uc = u.T @ c
+    a = c.T @ c - uc.T @ uc
+    b = c.T @ y_perp
+    pair = np.stack([first, second], axis=1)
+    a_s = a[pair[:, :, None], pair[:, None, :]]
+    b_s = b[pair]
+    return residual - np.einsum("gi,gij,gj->g", b_s, np.linalg.pinv(a_s, rcond=1e-12, hermitian=True), b_s)
+
+
+def _base_projection(parts):
+    """The base columns' orthonormal basis ``U`` (stacked over the runs, the per-run columns apart), ``y_perp = y - U U' y``
+    and the deviance of the base alone, ``constant + |y_perp|^2``."""
+    free = [np.array([n in PER_RUN for n in part.base_names]) for part in parts]
+    shared = np.vstack([part.base_w[:, ~f] for part, f in zip(parts, free)])
+    per_run = linalg.block_diag(*[part.base_w[:, f] for part, f in zip(parts, free)])
+    u, sv, _ = linalg.svd(np.hstack([shared, per_run]), full_matrices=False, check_finite=False)
+    u = u[:, sv > sv[0] * 1e-12]
+    y = np.concatenate([part.y_w for part in parts])
+    y_perp = y - u @ (u.T @ y)
+    return u, y_perp, sum(part.constant for part in parts) + float(y_perp @ y_perp)
 
 
 def _periodic_waveform(parts, periods, settings, length_s, block_s, deviance):
@@ -246,7 +321,7 @@ def _periodic_grid_deviances(parts, periods, h_max):
     basis of the (stacked, whitened) base design, ``y_perp = y - U U' y``
     and the sin/cos columns ``C`` of one period (per run), the deviance is
     ``constant + |y_perp|^2 - b' A^+ b`` with ``b = C' y_perp`` and
-    ``A = C'C - (U'C)'(U'C)``. ``A`` and ``b`` of ``h`` harmonics are the
+    ``A = C'C - (U'C)'(U'C)`` (:func:`_base_projection`). ``A`` and ``b`` of ``h`` harmonics are the
     leading rows and columns (per run) of those of the period's `h_max`
     (:func:`_whitened_harmonics`), so each period's are formed once.
 
@@ -255,14 +330,7 @@ def _periodic_grid_deviances(parts, periods, h_max):
     ndarray, shape (h_max.max(), len(periods))
         Row ``h - 1``: the deviances of ``h`` harmonics (inf where ``h`` exceeds `h_max`).
     """
-    free = [np.array([n in PER_RUN for n in part.base_names]) for part in parts]
-    shared = np.vstack([part.base_w[:, ~f] for part, f in zip(parts, free)])
-    per_run = linalg.block_diag(*[part.base_w[:, f] for part, f in zip(parts, free)])
-    u, sv, _ = linalg.svd(np.hstack([shared, per_run]), full_matrices=False, check_finite=False)
-    u = u[:, sv > sv[0] * 1e-12]
-    y = np.concatenate([part.y_w for part in parts])
-    y_perp = y - u @ (u.T @ y)
-    residual = sum(part.constant for part in parts) + float(y_perp @ y_perp)
+    u, y_perp, residual = _base_projection(parts)
     whitened = [_whitened_harmonics(part, periods, h_max) for part in parts]
     out = np.full((int(h_max.max()), len(periods)), np.inf)
     for h_top, (index, _) in whitened[0].items():

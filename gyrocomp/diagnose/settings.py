@@ -114,6 +114,8 @@ class DiagnoseSettings:
     temp_rate_smooth_s: float = 60.0
     thermal_lag_tau_s: tuple = (2.0, 28800.0)
     warmup_tau_s: tuple = (60.0, 14400.0)
+    warmup_min_ratio: float = 2.0
+    warmup_min_decays: float = 3.0
     rate_ramp_power: tuple = (0.25, 4.0)
     tau_grid_points: int = 24
     bias_correlation_s: tuple = (20.0, 7200.0)
@@ -144,6 +146,10 @@ class DiagnoseSettings:
                      "periodic_harmonic_min_cycles", "periodic_harmonic_min_blocks", "temperature_bin_c"):
             if not getattr(self, name) > 0:
                 raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be > 0")
+        if not self.warmup_min_decays > 0:
+            raise InputError(f"diagnose.warmup_min_decays = {self.warmup_min_decays!r} must be > 0")
+        if not self.warmup_min_ratio > 1.0:
+            raise InputError(f"diagnose.warmup_min_ratio = {self.warmup_min_ratio!r} must be > 1 (the second warm-up is the slower)")
         if not 0 <= self.poly_degree <= 3:
             raise InputError(f"diagnose.poly_degree = {self.poly_degree!r}: the baseline is at most cubic (0..3)")
         if not 0.0 < self.detection_power < 1.0:

@@ -251,3 +251,46 @@ def test_a_flicker_bias_keeps_the_flicker_form(seed):
     model = search.run()
     assert model.order == ("bias_instability",)
     assert model.noise.bias_correlation_s == 0.0
+
+
+@pytest.mark.parametrize("fast, slow, weight, seed", [(100.0, 3000.0, 0.6, 13), (60.0, 2000.0, 0.75, 14)])
+def test_a_warm_up_of_two_time_constants_is_one_warmup_of_two(fast, slow, weight, seed):
+    """A die settling at ``fast`` and a package at ``slow`` (``0.03 (w e^(-t/fast) + (1-w) e^(-t/slow))`` deg/s, the
+    independent generator's two-time-constant form): ``warmup`` in its form of two, both time constants within 25 %,
+    no ``rate_ramp`` beside it (a power law in time mimics the sum better than one exponential). The slow time
+    constants are within the 4 h run: beyond its half, the cubic in temperature takes part of the decay."""
+    t, temperature, measured, rate_c, rng = _oven(seed)
+    rate = _baseline(temperature, rng) + 0.03 * (weight * np.exp(-t / fast) + (1 - weight) * np.exp(-t / slow))
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert model.order == ("warmup",)
+    assert model.spec["warmup"]["form"] == "two_time_constants"
+    assert model.spec["warmup"]["tau_s"] == pytest.approx(fast, rel=0.25)
+    assert model.spec["warmup"]["slow_tau_s"] == pytest.approx(slow, rel=0.25)
+    coef = dict(zip(model.names, model.beta))
+    assert coef["warmup_slow"] == pytest.approx(0.03 * (1 - weight), rel=0.25)
+
+
+def test_a_warm_up_of_one_time_constant_keeps_one():
+    """``0.03 e^(-t / 600 s)`` deg/s: the second decay does not earn its two parameters; tau recovered."""
+    t, temperature, measured, rate_c, rng = _oven(15)
+    rate = _baseline(temperature, rng) + 0.03 * np.exp(-t / 600.0)
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert model.order == ("warmup",)
+    assert "form" not in model.spec["warmup"]
+    assert model.spec["warmup"]["tau_s"] == pytest.approx(600.0, rel=0.1)
+
+
+@pytest.mark.parametrize("seed", [16, 17])
+def test_a_warm_up_beside_a_drift_is_warmup_and_rate_ramp(seed):
+    """``0.02 e^(-t / 400 s) + 0.01 t / 4 h`` deg/s: ``warmup`` of one decay and the line. The form of two decays fits the
+    drift with a second time constant at the top of its range (a third of the run), which asks for a slower decay than
+    the run can settle: it is not kept, and the drift is left to ``rate_ramp``."""
+    t, temperature, measured, rate_c, rng = _oven(seed)
+    rate = _baseline(temperature, rng) + 0.02 * np.exp(-t / 400.0) + 0.01 * t / t[-1]
+    fit_p, search = _search(t, rate, measured)
+    model = search.run()
+    assert sorted(model.order) == ["rate_ramp", "warmup"]
+    assert "form" not in model.spec["warmup"]
+    assert dict(zip(model.names, model.beta))["rate_ramp"] == pytest.approx(0.01 / 4.0, rel=0.2)

@@ -516,7 +516,8 @@ def test_diagnose_model_out_fits_the_selected_effects_it_can_hold():
     T = _chamber(t, *CYCLE)
     y, _ = _gyro(t, T, 1, rate=0.0, asym=0.0, play=0.0)
     run = recording_from_frame(pd.DataFrame({"time": t, "rate": y, "temperature": T}), name="fit")
-    body = {"selected_effects": ["thermal_lag", "warmup", "bias_instability", "periodic"], "unexplained": {"present": True}}
+    body = {"selected_effects": ["thermal_lag", "warmup", "bias_instability", "periodic"], "unexplained": {"present": True},
+            "models": {"selected": {"params": {"warmup": {"tau_s": {"value": 900.0, "unit": "s"}}}}}}
     models, units, left_out = greybox_of(body, [run])
     fitted = models["rate"]["greybox"]["fitted"]
     assert models["rate"]["greybox"]["params"]["selection"] == "all"
@@ -524,6 +525,24 @@ def test_diagnose_model_out_fits_the_selected_effects_it_can_hold():
     assert fitted["spec_"]["tau_w_s"] > 0 and fitted["coef_"]["warmup"] == pytest.approx(0.03, rel=0.1)
     assert left_out == {"terms": ["thermal_lag", "warmup"], "not_held": ["bias_instability", "periodic"], "not_fitted": [],
                         "unexplained_structure": True}
+
+
+def test_diagnose_model_out_holds_a_warm_up_of_two_time_constants_in_second_warmup():
+    """A diagnosis' ``warmup`` in its form of two time constants (``slow_tau_s`` reported) is exported as ``warmup`` and
+    ``second_warmup``, both time constants within 25 % (the trade against the cubic in T measured in the test above)."""
+    from gyrocomp.commands.diagnose import greybox_of
+    from gyrocomp.recordings import recording_from_frame
+
+    t = np.arange(0, 21600.0)
+    T = _chamber(t, *CYCLE)
+    y, _ = _gyro(t, T, 1, tau_e=0.0, rate=0.0, asym=0.0, play=0.0, warm=0.03, warm2=0.02)
+    run = recording_from_frame(pd.DataFrame({"time": t, "rate": y, "temperature": T}), name="fit")
+    warmup = {"form": {"value": "two_time_constants", "unit": ""}, "tau_s": {"value": 900.0, "unit": "s"}, "slow_tau_s": {"value": 4000.0, "unit": "s"}}
+    body = {"selected_effects": ["warmup"], "unexplained": {"present": False}, "models": {"selected": {"params": {"warmup": warmup}}}}
+    models, units, left_out = greybox_of(body, [run])
+    spec = models["rate"]["greybox"]["fitted"]["spec_"]
+    assert left_out["terms"] == ["warmup", "second_warmup"] and left_out["not_fitted"] == []
+    assert [spec["tau_w_s"], spec["tau_w2_s"]] == pytest.approx([900.0, 4000.0], rel=0.25)
 
 
 def test_train_names_every_selected_term_and_its_parameters_in_one_line():

@@ -71,6 +71,7 @@ class Effect(abc.ABC):
         diagnosis fits each (its nonlinear parameter too) and keeps the one
         of lowest BIC (:meth:`n_params_of` counts its parameters): a
         richer form's extra columns must earn their place like an effect.
+        A form may carry a second nonlinear parameter (:meth:`paired`).
     """
 
     name: str = ""
@@ -104,6 +105,13 @@ class Effect(abc.ABC):
     def n_params_of(self, params: dict) -> int:
         """Free parameters on one run of the form `params` (:attr:`forms`); :attr:`n_params` without forms."""
         return self.n_params
+
+    def paired(self, form: dict, settings, length_s: float):
+        """``(key, min_ratio, max_value)`` when `form` has a second nonlinear parameter ``key`` on the same grid, whose
+        column is the plain form's at that value (``warmup``'s second time constant), at least `min_ratio` times the
+        first and at most `max_value` on a run `length_s` long (`settings`: the ``[diagnose]`` table); None (the
+        default) when it has not. The paired columns are shared by the runs."""
+        return None
 
     def bias(self, time_s, housing_c, gyro) -> np.ndarray:
         """The simulated bias contribution [deg/s] of a deterministic effect.
