@@ -176,7 +176,7 @@ def _best_pair(parts, effect, form, grid, key2, ratio, top, deviance):
     with the refined ``x`` held, neither crossing the ratio nor `top`.
 
     An ``x2`` that settles at `top` asks for more than `top`, which the run
-    cannot tell from another effect (a warm-up slower than a third of the run
+    cannot tell from another effect (a warm-up slower than half the run
     is a drift there, ``rate_ramp``'s): the form is then given an infinite
     deviance (never kept), as on a run too short for any pair.
     """

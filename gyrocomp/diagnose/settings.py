@@ -115,7 +115,7 @@ class DiagnoseSettings:
     thermal_lag_tau_s: tuple = (2.0, 28800.0)
     warmup_tau_s: tuple = (60.0, 14400.0)
     warmup_min_ratio: float = 2.0
-    warmup_min_decays: float = 3.0
+    warmup_min_decays: float = 2.0
     rate_ramp_power: tuple = (0.25, 4.0)
     tau_grid_points: int = 24
     bias_correlation_s: tuple = (20.0, 7200.0)

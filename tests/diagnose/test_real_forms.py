@@ -285,7 +285,7 @@ def test_a_warm_up_of_one_time_constant_keeps_one():
 @pytest.mark.parametrize("seed", [16, 17])
 def test_a_warm_up_beside_a_drift_is_warmup_and_rate_ramp(seed):
     """``0.02 e^(-t / 400 s) + 0.01 t / 4 h`` deg/s: ``warmup`` of one decay and the line. The form of two decays fits the
-    drift with a second time constant at the top of its range (a third of the run), which asks for a slower decay than
+    drift with a second time constant at the top of its range (half the run), which asks for a slower decay than
     the run can settle: it is not kept, and the drift is left to ``rate_ramp``."""
     t, temperature, measured, rate_c, rng = _oven(seed)
     rate = _baseline(temperature, rng) + 0.02 * np.exp(-t / 400.0) + 0.01 * t / t[-1]
