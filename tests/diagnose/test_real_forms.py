@@ -294,3 +294,20 @@ def test_a_warm_up_beside_a_drift_is_warmup_and_rate_ramp(seed):
     assert sorted(model.order) == ["rate_ramp", "warmup"]
     assert "form" not in model.spec["warmup"]
     assert dict(zip(model.names, model.beta))["rate_ramp"] == pytest.approx(0.01 / 4.0, rel=0.2)
+
+
+def test_the_pair_grid_scores_equal_the_direct_fit():
+    """``_pair_grid_deviances`` (every pair at once from the whitened single columns) equals the deviance of the form of
+    two decays fitted directly, pair by pair, to 1e-6."""
+    from gyrocomp.diagnose import nonlinear
+    from gyrocomp.diagnose.effects import KINDS
+
+    t, temperature, measured, rate_c, rng = _oven(13)
+    rate = _baseline(temperature, rng) + 0.03 * (0.6 * np.exp(-t / 100.0) + 0.4 * np.exp(-t / 3000.0))
+    fit_p, search = _search(t, rate, measured)
+    parts = [nonlinear._JointPart(fit_p, search.baseline, "warmup")]
+    grid = KINDS["warmup"].grid(fit_p.settings, 14400.0, 10.0)
+    first, second = np.array([0, 3, 5, 9]), np.array([10, 20, 23, 12])
+    direct = [nonlinear._joint_deviance(parts, {"form": "two_time_constants", "tau_s": grid[a], "slow_tau_s": grid[b]}, "warmup").sum()
+              for a, b in zip(first, second)]
+    np.testing.assert_allclose(nonlinear._pair_grid_deviances(parts, "warmup", grid, first, second), direct, rtol=0, atol=1e-6)
