@@ -12,12 +12,15 @@ come from the fit run's Gaussian likelihood (the deviance
 * a nonlinear parameter ``theta`` (a time constant, a deadband, a period):
   ``var(theta) = 2 / (d^2 D / d theta^2)`` of the profile deviance (the
   coefficients re-estimated at each ``theta``), by a central difference of
-  relative step ``step``;
+  relative step ``step``; an effect's two nonlinear parameters (``warmup``'s
+  time constants) from the inverse of their whole Hessian;
 * a noise level ``q`` (a random walk, a bias instability and its
   correlation time): the same curvature in ``log q``, the other noise levels
   held.
 
-The three parts add as independent (their cross terms are left out). Where
+The linear part holds the nonlinear parameters at their estimates; their
+own spread reaches every reported value along the profile (an amplitude
+moves with its time constant). The noise part adds as independent. Where
 the curvature is not positive (a parameter at the edge of what the run
 shows), the uncertainty is None: not estimated.
 """
@@ -62,10 +65,7 @@ def uncertainties(problem, model, step: float = 0.02) -> dict:
         var = dict.fromkeys(values, 0.0)
         if effect in DETERMINISTIC:
             _add(var, _linear(problem, model, effect, names, cov, values))
-            for name, theta in model.spec.get(effect, {}).items():
-                if isinstance(theta, float) and name in var:
-                    curvature = _curvature(lambda f: _at_parameter(problem, model, effect, name, theta * f, whitener), d0, step) / theta**2
-                    var[name] = var[name] + 2.0 / curvature if curvature > 0.0 else math.inf
+            _add(var, _nonlinear(problem, model, effect, values, names, whitener, d0, step))
         for level in NOISE_PARAMETERS.get(effect, ()):
             q = getattr(model.noise, level)
             if q > 0.0:
@@ -108,15 +108,54 @@ def _linear(problem, model, effect, names, cov, values):
     return dict(zip(values, var))
 
 
+def _nonlinear(problem, model, effect, values, names, whitener, d0, step):
+    """Variance each reported value takes from the effect's nonlinear parameters: ``g' C g``.
+
+    ``C = 2 H^-1`` is the covariance of the parameters' logs, ``H`` the
+    Hessian of the profile deviance in them (central differences, a cross
+    term from the four corners: where two parameters trade, as ``warmup``'s
+    time constants do, the curvature in one with the other held understates
+    its spread); ``g`` is each reported value's change along the profile per
+    unit log (a parameter's own: itself; an amplitude: its coefficient
+    re-estimated there, which a time constant's spread moves). ``H`` not
+    positive definite: inf (not estimated).
+    """
+    spec = model.spec.get(effect, {})
+    keys = [k for k, theta in spec.items() if isinstance(theta, float) and k in values]
+    if not keys:
+        return {}
+    eye = step * np.eye(len(keys))
+    cache = {}
+
+    def at(shift):
+        if tuple(shift) not in cache:
+            params = {**spec, **{k: spec[k] * math.exp(h) for k, h in zip(keys, shift)}}
+            deviance, beta = _at_parameters(problem, model, effect, params, whitener)
+            cache[tuple(shift)] = deviance, _numeric(KINDS[effect].report(dict(zip(names, beta)), params, model.noise))
+        return cache[tuple(shift)]
+
+    hess = np.empty((len(keys), len(keys)))
+    for i in range(len(keys)):
+        hess[i, i] = (at(eye[i])[0] - 2.0 * d0 + at(-eye[i])[0]) / step**2
+        for j in range(i):
+            corners = [at(a * eye[i] + b * eye[j])[0] for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+            hess[i, j] = hess[j, i] = (corners[0] - corners[1] - corners[2] + corners[3]) / (4.0 * step**2)
+    if np.any(np.linalg.eigvalsh(hess) <= 0.0):
+        return {k: math.inf for k in values if k in keys}
+    cov = 2.0 * np.linalg.inv(hess)
+    grad = np.array([[(at(eye[i])[1][v] - at(-eye[i])[1][v]) / (2.0 * step) for i in range(len(keys))] for v in values])
+    return dict(zip(values, np.einsum("vi,ij,vj->v", grad, cov, grad)))
+
+
 def _curvature(deviance_at, d0, step):
     """``d^2 D / d(log x)^2`` at the fitted point by a central difference (``deviance_at(factor)``)."""
     up, down = deviance_at(math.exp(step)), deviance_at(math.exp(-step))
     return (up - 2.0 * d0 + down) / step**2
 
 
-def _at_parameter(problem, model, effect, name, value, whitener):
-    spec = {**model.spec, effect: {**model.spec[effect], name: value}}
-    return profile_deviance(problem.y, problem.design_blocks(spec)[0], whitener)[0]
+def _at_parameters(problem, model, effect, params, whitener):
+    """The profile deviance and coefficients with `effect` at `params`."""
+    return profile_deviance(problem.y, problem.design_blocks({**model.spec, effect: params})[0], whitener)
 
 
 def _at_noise(problem, model, level, value, Xb):

@@ -57,6 +57,38 @@ def test_stated_sigmas_match_the_scatter_of_the_estimates():
 
 
 
+def _two_decays(seed, fast=100.0, slow=2000.0, amplitude=0.02, sigma=0.01):
+    """The oven run with a warm-up of two time constants (``amplitude`` each) in place of the play."""
+    rng = np.random.default_rng(seed)
+    kt, kc = np.array(KNOTS, dtype=float).T
+    t = np.arange(kt[-1])
+    temperature = np.interp(t, kt, kc)
+    rate = 0.02 + 2e-3 * (temperature - 25.0) + amplitude * (np.exp(-t / fast) + np.exp(-t / slow)) + rng.normal(0.0, sigma, t.size)
+    rec = recording_from_frame(pd.DataFrame({"time": t, "rate": rate, "temperature": temperature + rng.normal(0.0, 0.01, t.size)}), name="oven")
+    fit_p, _, _ = problems(rec, [], DiagnoseSettings())
+    return fit_p, extend(fit_p, fit_baseline(fit_p), "warmup")
+
+
+def test_two_time_constants_state_sigmas_that_match_their_scatter():
+    """A warm-up of 100 s and 2000 s: the time constants trade with each other and with their amplitudes; the stated
+    sigmas (the whole Hessian of the two, carried to the amplitudes along the profile) match the scatter. With each
+    time constant's curvature taken alone and the amplitudes at fixed time constants, the slow amplitude's z spread 2.35."""
+    truth = {"tau_s": 100.0, "slow_tau_s": 2000.0, "amplitude_dps": 0.02, "slow_amplitude_dps": 0.02}
+    z = {k: [] for k in truth}
+    for seed in range(40, 56):
+        fit_p, model = _two_decays(seed)
+        assert model.spec["warmup"]["form"] == "two_time_constants"
+        sig = uncertainties(fit_p, model)["warmup"]
+        coef = dict(zip(model.names, model.beta))
+        est = {"tau_s": model.spec["warmup"]["tau_s"], "slow_tau_s": model.spec["warmup"]["slow_tau_s"],
+               "amplitude_dps": coef["warmup"], "slow_amplitude_dps": coef["warmup_slow"]}
+        for k in z:
+            z[k].append((est[k] - truth[k]) / sig[k])
+    for k, v in z.items():
+        assert 0.6 < np.std(v) < 1.6, (k, np.round(v, 2))
+        assert abs(np.mean(v)) < 0.8, (k, np.round(v, 2))
+
+
 def _report(uncertainty):
     params = {"hysteresis": {"amplitude_dps": {"value": 0.0099, "unit": "deg/s", "uncertainty": uncertainty},
                              "operator": {"value": "play", "unit": ""}}}
