@@ -139,8 +139,9 @@ def _best_in_form(problem: Problem, parts, effect: str, form: dict):
     grid = kind.grid(problem.settings, length_s, run.block_s)
     if effect == "periodic":
         return _periodic_waveform(parts, grid, problem.settings, length_s, run.block_s, lambda p: deviance(form | p))
-    if kind.paired(form, problem.settings, length_s):
-        return _best_pair(parts, effect, form, grid, *kind.paired(form, problem.settings, length_s), deviance)
+    pair = kind.paired(form, problem.settings, length_s)
+    if pair:
+        return _best_pair(parts, effect, form, grid, *pair, deviance)
     values = np.array([deviance(form | {key: float(v)}) for v in grid])
     value, best = _refine(grid, values, lambda v: deviance(form | {key: v}))
     return form | {key: value}, best
