@@ -169,7 +169,7 @@ def compare(runs, model, term, events=tuple(EVENTS), settings: DiagnoseSettings 
         for (_, p), (y, X, basis), (e, Xw, lower), (G, where) in zip(runs, merged, innov, columns[event]):
             j = int(np.argmax(np.abs(column_scores(e, Xw, lower, G)[0])))
             with_event.append((y, np.column_stack([X, G[:, j]]), basis))
-            found.append(_place(where, j, _merged_starts(p, y.size, max_blocks), basis.block_s))
+            found.append(_place(where, j, _merged_starts(p, basis), basis.block_s))
         _, d_e, betas = fit_noise_runs(with_event, without, less)
         d_te = fit_noise_runs(with_event, noise, free)[1]
         k_event = EVENTS[event] * len(merged)
@@ -209,11 +209,12 @@ def _verdict(gain, margin):
     return "inseparable"
 
 
-def _merged_starts(problem, k, max_blocks):
-    """The start of each of the `k` merged blocks [s from the run's first sample]: across a gap of a run in segments too."""
+def _merged_starts(problem, merged):
+    """The start of each block of `merged` (:func:`~gyrocomp.effects.likelihood.merge_blocks`' basis of `problem`'s blocks)
+    [s from the run's first sample]: across a gap of a run in segments too."""
     run = problem.run
     starts = run.block_start_s if run.block_start_s is not None else np.arange(run.n_blocks) * run.block_s
-    return starts[:: -(-problem.y.size // max_blocks)][:k]
+    return starts[:: round(merged.block_s / problem.basis.block_s)][: merged.n_blocks]
 
 
 def _place(where, j, starts, block_s):

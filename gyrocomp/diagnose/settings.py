@@ -143,11 +143,9 @@ class DiagnoseSettings:
 
     def __post_init__(self):
         for name in ("block_s", "max_rate_hz", "bias_correlation_max_fraction", "gap_block_s", "smooth_s", "periodic_oversample", "periodic_min_blocks",
-                     "periodic_harmonic_min_cycles", "periodic_harmonic_min_blocks", "temperature_bin_c"):
+                     "periodic_harmonic_min_cycles", "periodic_harmonic_min_blocks", "temperature_bin_c", "warmup_min_decays"):
             if not getattr(self, name) > 0:
                 raise InputError(f"diagnose.{name} = {getattr(self, name)!r} must be > 0")
-        if not self.warmup_min_decays > 0:
-            raise InputError(f"diagnose.warmup_min_decays = {self.warmup_min_decays!r} must be > 0")
         if not self.warmup_min_ratio > 1.0:
             raise InputError(f"diagnose.warmup_min_ratio = {self.warmup_min_ratio!r} must be > 1 (the second warm-up is the slower)")
         if not 0 <= self.poly_degree <= 3:
